@@ -6,7 +6,9 @@ import pytest
 import trimesh
 
 DATA_DIR = Path(
-    os.environ.get("SKLEARN_MESHPH_DATA", Path(__file__).resolve().parents[1] / ".." / "shared" / "data")
+    os.environ.get(
+        "SKLEARN_MESHPH_DATA", Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    )
 )
 
 

@@ -1,0 +1,30 @@
+"""Small helpers shared by the estimators."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+N_JOBS_DOC = (
+    "Number of parallel jobs. ``None`` means 1 unless in a "
+    ":func:`joblib.parallel_backend` context; ``-1`` means all processors."
+)
+
+
+def as_sample_list(X, what: str = "meshes") -> list:
+    """``X`` as a list of samples, refusing a single sample passed by mistake."""
+    if isinstance(X, np.ndarray) and X.dtype == object and X.ndim == 1:
+        X = list(X)
+    if isinstance(X, str | bytes | os.PathLike | np.ndarray) or hasattr(X, "vertices"):
+        raise TypeError(
+            f"X must be a sequence of {what} (one per sample), got a single "
+            f"{type(X).__name__}; wrap it in a list"
+        )
+    if not isinstance(X, Sequence) and not hasattr(X, "__iter__"):
+        raise TypeError(f"X must be a sequence of {what}, got {type(X).__name__}")
+    samples = list(X)
+    if not samples:
+        raise ValueError(f"X is empty: expected at least one of {what}")
+    return samples

@@ -1,0 +1,288 @@
+"""Laplacians of triangle meshes and their low eigenpairs.
+
+Two discretizations:
+
+- ``"cotangent"``: the linear finite-element Laplace-Beltrami operator, cotangent
+  stiffness matrix ``L`` with the barycentric lumped mass matrix ``M`` (one third of the
+  area of every incident triangle per vertex, as in lapy, potpourri3d and
+  robust-laplacian), solved as the generalized problem ``L phi = lambda M phi``.
+- ``"graph"``: the combinatorial graph Laplacian ``D - A`` of the mesh edges, with
+  ``M = I``. It ignores geometry and is not resolution invariant: its eigenvalues scale
+  with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
+
+Eigenpairs come from shift-invert Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`)
+with a small negative shift and one sparse factorization of ``L - sigma M``, ordered by
+nested dissection (METIS, through pymetis) so that fill-in stays near-linear.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+from scipy.sparse.linalg import LinearOperator, eigsh, splu
+
+from ._mesh import check_mesh, clean_mesh, face_double_areas
+
+__all__ = ["cotangent_laplacian", "graph_laplacian", "laplacian_eigenfunctions"]
+
+LAPLACIANS = ("cotangent", "graph")
+
+# Below this size a dense generalized eigensolver is faster and simpler than ARPACK.
+_DENSE_MAX_VERTICES = 200
+# Shift of shift-invert, relative to the typical eigenvalue scale trace(L)/trace(M)/n.
+_RELATIVE_SHIFT = 1e-2
+
+
+def cotangent_laplacian(
+    vertices: np.ndarray, faces: np.ndarray
+) -> tuple[sp.csr_matrix, sp.dia_matrix]:
+    """Cotangent stiffness matrix and barycentric lumped mass matrix.
+
+    Parameters
+    ----------
+    vertices : ndarray of shape (n, 3)
+    faces : ndarray of shape (m, 3)
+        Non-degenerate triangles (see :func:`sklearn_meshph.clean_mesh`).
+
+    Returns
+    -------
+    L : scipy.sparse.csr_matrix of shape (n, n)
+        Symmetric positive semi-definite stiffness matrix,
+        ``L[i, j] = -(cot alpha_ij + cot beta_ij) / 2`` for an edge ``ij`` and rows
+        summing to zero.
+    M : scipy.sparse.dia_matrix of shape (n, n)
+        Diagonal lumped mass: a third of the area of the triangles around each vertex.
+
+    Notes
+    -----
+    Barycentric and Voronoi lumping differ per vertex by up to 18% on irregular meshes
+    and move eigenvalues in the fourth digit; barycentric lumping is positive on every
+    mesh (Voronoi areas need a fix-up on obtuse triangles) and matches lapy, potpourri3d
+    and robust-laplacian.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from sklearn_meshph import cotangent_laplacian
+    >>> sphere = trimesh.creation.icosphere(2)
+    >>> L, M = cotangent_laplacian(sphere.vertices, sphere.faces)
+    >>> bool(abs(L.sum()) < 1e-9), round(float(M.sum()), 2)
+    (True, 12.33)
+    """
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64)
+    n = len(vertices)
+    corners = [vertices[faces[:, k]] for k in range(3)]
+    double_area = face_double_areas(vertices, faces)
+    rows, cols, weights = [], [], []
+    for k in range(3):
+        # The angle at corner k is opposite the edge (k+1, k+2).
+        u = corners[(k + 1) % 3] - corners[k]
+        v = corners[(k + 2) % 3] - corners[k]
+        cot = np.einsum("ij,ij->i", u, v) / double_area
+        rows.append(faces[:, (k + 1) % 3])
+        cols.append(faces[:, (k + 2) % 3])
+        weights.append(0.5 * cot)
+    i = np.concatenate(rows)
+    j = np.concatenate(cols)
+    w = np.concatenate(weights)
+    off = sp.coo_matrix((-w, (i, j)), shape=(n, n))
+    off = (off + off.T).tocsr()
+    off.sum_duplicates()
+    L = off - sp.diags(np.asarray(off.sum(axis=1)).ravel())
+    mass = np.bincount(faces.ravel(), weights=np.repeat(double_area / 6.0, 3), minlength=n)
+    return L.tocsr(), sp.diags(mass)
+
+
+def graph_laplacian(faces: np.ndarray, n_vertices: int) -> tuple[sp.csr_matrix, sp.dia_matrix]:
+    """Combinatorial graph Laplacian ``D - A`` of the mesh edges, and the identity.
+
+    Parameters
+    ----------
+    faces : ndarray of shape (m, 3)
+    n_vertices : int
+
+    Returns
+    -------
+    L : scipy.sparse.csr_matrix of shape (n, n)
+    M : scipy.sparse.dia_matrix
+        The identity, so that both Laplacians share one generalized-eigenproblem solver.
+    """
+    from ._mesh import mesh_edges
+
+    adjacency = mesh_edges(np.asarray(faces, dtype=np.int64), n_vertices)
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    return (sp.diags(degree) - adjacency).tocsr(), sp.identity(n_vertices, format="dia")
+
+
+def build_laplacian(vertices, faces, laplacian: str):
+    """Stiffness and mass matrices of the named discretization."""
+    if laplacian == "cotangent":
+        return cotangent_laplacian(vertices, faces)
+    if laplacian == "graph":
+        return graph_laplacian(faces, len(vertices))
+    raise ValueError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
+
+
+def _fill_reducing_order(A: sp.csr_matrix) -> np.ndarray | None:
+    """Nested-dissection order of the graph of ``A`` (None when METIS is unavailable)."""
+    try:
+        import pymetis
+    except ImportError:
+        return None
+    graph = A.copy()
+    graph.setdiag(0)
+    graph.eliminate_zeros()
+    perm, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr, graph.indices))
+    return np.asarray(perm, dtype=np.int64)
+
+
+class ShiftInvertOperator(LinearOperator):
+    """``x -> (L - sigma M)^{-1} x`` by one sparse LU factorization.
+
+    ``L - sigma M`` is symmetric positive definite for ``sigma < 0``, so pivoting on the
+    diagonal is stable: the factorization keeps a symmetric fill-reducing order (METIS
+    nested dissection) instead of SuperLU's COLAMD, which is meant for unsymmetric
+    matrices and gives several times more fill on meshes.
+    """
+
+    def __init__(self, A: sp.spmatrix):
+        A = sp.csr_matrix(A)
+        super().__init__(dtype=np.float64, shape=A.shape)
+        self.perm = _fill_reducing_order(A)
+        if self.perm is None:
+            self.lu = splu(A.tocsc())
+        else:
+            Ap = A[self.perm][:, self.perm].tocsc()
+            self.lu = splu(
+                Ap,
+                permc_spec="NATURAL",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+            self.iperm = np.empty_like(self.perm)
+            self.iperm[self.perm] = np.arange(len(self.perm))
+
+    def _matvec(self, x):
+        x = np.asarray(x, dtype=np.float64).ravel()
+        if self.perm is None:
+            return self.lu.solve(x)
+        return self.lu.solve(x[self.perm])[self.iperm]
+
+
+def eigen_shift(L: sp.spmatrix, M: sp.spmatrix) -> float:
+    """A negative shift well below the first non-zero eigenvalue, free of scale and size.
+
+    ``trace(L) / trace(M) / n`` follows the first non-zero eigenvalue of a surface mesh
+    under scaling and refinement (both grow like ``1 / area``), so a fixed fraction of it
+    keeps ``L - sigma M`` equally well conditioned for every mesh.
+    """
+    n = L.shape[0]
+    return -_RELATIVE_SHIFT * float(L.diagonal().sum()) / float(M.diagonal().sum()) / n
+
+
+def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """Flip each column so that its mass-weighted third moment is positive.
+
+    The skewness ``sum_i m_i phi_i^3`` is a geometric quantity: it has the same sign on
+    the same shape at any resolution, scale or pose. When it vanishes (relative to
+    ``sum_i m_i |phi_i|^3``, below 1e-8: antisymmetric eigenfunctions of symmetric
+    shapes), the entry of largest absolute value (lowest index among ties) is made
+    positive instead.
+    """
+    vectors = vectors.copy()
+    for j in range(vectors.shape[1]):
+        v = vectors[:, j]
+        skew = float(np.dot(mass, v**3))
+        scale = float(np.dot(mass, np.abs(v) ** 3))
+        if abs(skew) > 1e-8 * scale:
+            flip = skew < 0
+        else:
+            flip = v[np.argmax(np.abs(v))] < 0
+        if flip:
+            vectors[:, j] = -v
+    return vectors
+
+
+def generalized_eigenpairs(
+    L: sp.spmatrix, M: sp.spmatrix, n_eigs: int, *, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n_eigs`` smallest eigenpairs of ``L phi = lambda M phi``.
+
+    Eigenvectors are M-orthonormal (``phi^T M phi = 1``) with signs fixed by
+    :func:`fix_signs`; eigenvalues are ascending. ARPACK's start vector is drawn from
+    ``numpy.random.default_rng(seed)``, so results are bitwise reproducible.
+    """
+    n = L.shape[0]
+    mass = M.diagonal()
+    if n <= _DENSE_MAX_VERTICES or n_eigs >= n - 1:
+        values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
+        values, vectors = values[:n_eigs], vectors[:, :n_eigs]
+    else:
+        sigma = eigen_shift(L, M)
+        op = ShiftInvertOperator(L - sigma * M)
+        v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
+        values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
+        order = np.argsort(values, kind="stable")
+        values, vectors = values[order], vectors[:, order]
+    # L is positive semi-definite: a negative eigenvalue can only be rounding.
+    values = np.maximum(values, 0.0)
+    vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))
+    return values, fix_signs(vectors, mass)
+
+
+def laplacian_eigenfunctions(
+    mesh,
+    n_eigs: int,
+    laplacian: str = "cotangent",
+    *,
+    components: str = "largest",
+    random_state: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """First eigenpairs of a mesh Laplacian, the constant one included.
+
+    The mesh is used as given: no rescaling, so the unit sphere gives eigenvalues close to
+    ``l (l + 1)``: 0, 2, 2, 2, 6, ... For scale- and resolution-free eigenfunctions use
+    :class:`LaplacianEigenTransformer`, which normalizes to unit area.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
+        See :func:`check_mesh`. The mesh is cleaned by :func:`clean_mesh`.
+    n_eigs : int
+        Number of eigenpairs, at least 1 and at most the number of kept vertices.
+    laplacian : {"cotangent", "graph"}, default="cotangent"
+        ``"cotangent"`` solves ``L phi = lambda M phi`` with the cotangent stiffness and
+        lumped mass; ``"graph"`` uses the graph Laplacian and ``M = I``.
+    components : {"largest", "error"}, default="largest"
+        Connected-component policy of :func:`clean_mesh`.
+    random_state : int, default=0
+        Seed of ARPACK's start vector.
+
+    Returns
+    -------
+    eigenvalues : ndarray of shape (n_eigs,)
+        Ascending.
+    eigenvectors : ndarray of shape (n_vertices, n_eigs)
+        Rows follow the cleaned vertex set (the input's vertices when the mesh needs no
+        cleaning). Columns are M-orthonormal for ``"cotangent"`` and of unit Euclidean
+        norm for ``"graph"``; signs follow the rule of
+        :class:`LaplacianEigenTransformer`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from sklearn_meshph import laplacian_eigenfunctions
+    >>> sphere = trimesh.creation.icosphere(4)
+    >>> values, vectors = laplacian_eigenfunctions(sphere, 5)
+    >>> [round(float(v), 1) for v in values]
+    [0.0, 2.0, 2.0, 2.0, 6.0]
+    """
+    vertices, faces = check_mesh(mesh)
+    clean = clean_mesh(vertices, faces, components=components)
+    n = len(clean.vertices)
+    if not 1 <= n_eigs <= n:
+        raise ValueError(f"n_eigs must be between 1 and {n} (the kept vertices), got {n_eigs}")
+    L, M = build_laplacian(clean.vertices, clean.faces, laplacian)
+    return generalized_eigenpairs(L, M, n_eigs, seed=random_state)
