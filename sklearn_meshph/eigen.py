@@ -44,15 +44,31 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, n_eigs, seed):
     return generalized_eigenpairs(L, M, n_eigs, seed=seed)
 
 
-def _eigen_one(mesh, index, *, laplacian, normalization, components, n_eigs, seed, memory):
+def _repeats(values: np.ndarray, i: int) -> np.ndarray:
+    """Indices of the eigenvalues that coincide with ``values[i]`` (relative 1e-3)."""
+    return np.flatnonzero(np.abs(values - values[i]) <= _REPEATED_RTOL * abs(values[i]))
+
+
+def _eigen_one(mesh, index, *, indices, laplacian, normalization, components, seed, memory):
     with threadpool_limits(limits=1, user_api="blas"):
         vertices, faces = check_mesh(mesh, index=index)
         clean = clean_mesh(vertices, faces, components=components, index=index)
         n = len(clean.vertices)
         solve = memory.cache(mesh_eigenpairs)
-        values, vectors = solve(
-            clean.vertices, clean.faces, laplacian, normalization, min(n_eigs, n), seed
-        )
+        n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
+        while True:
+            n_eigs = min(n_eigs, n)
+            values, vectors = solve(
+                clean.vertices, clean.faces, laplacian, normalization, n_eigs, seed
+            )
+            # A repeated eigenvalue that reaches the last computed one may go on: solve
+            # a larger block so that the warning can state its whole multiplicity.
+            cut = any(
+                i < n_eigs and i > 0 and _repeats(values, i)[-1] == n_eigs - 1 for i in indices
+            )
+            if not cut or n_eigs == n:
+                break
+            n_eigs += _EIGS_BLOCK
     return clean, values, vectors, None if n == len(vertices) else clean.vertex_indices
 
 
@@ -60,19 +76,18 @@ def _warn_if_repeated(values: np.ndarray, indices, sample: int) -> None:
     for i in indices:
         if i == 0:
             continue
-        lam = values[i]
-        close = np.flatnonzero(np.abs(values - lam) <= _REPEATED_RTOL * abs(lam))
+        close = _repeats(values, i)
         if len(close) < 2:
             continue
+        lam = values[i]
         others = np.delete(values, close)
         gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
-        at_least = "at least " if close[-1] == len(values) - 1 else ""
         spread = (values[close].max() - values[close].min()) / abs(lam)
         warnings.warn(
             f"sample {sample}: eigenvalue {i} ({lam:.6g}) is repeated with multiplicity "
-            f"{at_least}{len(close)} (eigenvalues {close[0]}-{close[-1]} agree within a "
-            f"relative {spread:.1e}; relative gap to the next distinct one {gap:.2g}); "
-            "its eigenfunction is not unique",
+            f"{len(close)} (eigenvalues {close[0]}-{close[-1]} agree within a relative "
+            f"{spread:.1e}; relative gap to the next distinct one {gap:.2g}); its "
+            "eigenfunction is not unique",
             RepeatedEigenvalueWarning,
             stacklevel=3,
         )
@@ -231,7 +246,6 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         self._validate_params()
         meshes = as_sample_list(X)
         indices = self._indices()
-        n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
         if isinstance(self.random_state, Integral):
             seed = int(self.random_state)
         else:
@@ -241,10 +255,10 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
             delayed(_eigen_one)(
                 mesh,
                 i,
+                indices=indices,
                 laplacian=self.laplacian,
                 normalization=self.normalization,
                 components=self.components,
-                n_eigs=n_eigs,
                 seed=seed,
                 memory=memory,
             )

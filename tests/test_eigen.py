@@ -1,0 +1,205 @@
+"""LaplacianEigenTransformer: invariances, determinism, caching, warnings, estimator API."""
+
+import pickle
+import warnings
+from pathlib import Path
+
+import joblib
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+from sklearn.base import clone
+
+from sklearn_meshph import LaplacianEigenTransformer, RepeatedEigenvalueWarning, ScalarField
+
+
+def ellipsoid(subdivisions=3):
+    sphere = trimesh.creation.icosphere(subdivisions)
+    return trimesh.Trimesh(sphere.vertices * [1.0, 1.5, 2.2], sphere.faces, process=False)
+
+
+def bumpy(subdivisions=3):
+    """A shape without symmetry, geometric or combinatorial: low eigenvalues are simple."""
+    sphere = trimesh.creation.icosphere(subdivisions)
+    centers = sphere.triangles_center
+    refine = np.flatnonzero((centers[:, 0] > 0.2) & (centers[:, 1] > -0.3))
+    vertices, faces = trimesh.remesh.subdivide(sphere.vertices, sphere.faces, refine)
+    vertices = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    x, y, z = vertices.T
+    radius = 1 + 0.25 * x + 0.15 * y * z + 0.1 * x * y
+    return trimesh.Trimesh(vertices * radius[:, None] * [1.0, 1.4, 2.0], faces, process=False)
+
+
+def test_returns_scalar_fields_with_requested_columns():
+    meshes = [bumpy(2), bumpy(3)]
+    fields = LaplacianEigenTransformer().fit_transform(meshes)
+    assert all(isinstance(f, ScalarField) for f in fields)
+    assert fields[1].values.shape == (len(meshes[1].vertices),)
+    assert fields[1].eigenvalues.shape == (1,)
+    several = LaplacianEigenTransformer(eigen_index=(1, 2, 5)).fit_transform(meshes)
+    assert several[0].values.shape == (len(meshes[0].vertices), 3)
+    np.testing.assert_array_equal(several[1].values[:, 0], fields[1].values)
+    assert np.all(np.diff(several[1].eigenvalues) > 0)
+
+
+def test_area_normalization_gives_unit_mean_square():
+    fields = LaplacianEigenTransformer(eigen_index=(1, 2)).fit_transform([bumpy()])
+    field = fields[0]
+    mesh = trimesh.Trimesh(field.vertices, field.faces, process=False)
+    mass = np.zeros(len(field.vertices))
+    np.add.at(mass, field.faces.ravel(), np.repeat(mesh.area_faces / 3, 3))
+    mass /= mass.sum()
+    np.testing.assert_allclose(mass @ field.values**2, 1.0, rtol=1e-10)
+
+
+@pytest.mark.parametrize("laplacian", ["cotangent", "graph"])
+def test_invariant_to_rotation_translation_and_scale(laplacian):
+    mesh = bumpy()
+    rotation = Rotation.from_euler("xyz", [0.3, -1.1, 2.0]).as_matrix()
+    moved = trimesh.Trimesh(
+        mesh.vertices @ rotation.T * 7.5 + [3.0, -2.0, 10.0], mesh.faces, process=False
+    )
+    est = LaplacianEigenTransformer(eigen_index=(1, 2, 3), laplacian=laplacian)
+    original, transformed = est.fit_transform([mesh, moved])
+    np.testing.assert_allclose(transformed.values, original.values, atol=1e-7)
+    np.testing.assert_allclose(transformed.eigenvalues, original.eigenvalues, rtol=1e-8)
+
+
+def test_resolution_invariance_under_subdivision():
+    # Midpoint subdivision keeps the surface and the original vertices (listed first).
+    mesh = bumpy(4)
+    vertices, faces = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)
+    np.testing.assert_array_equal(vertices[: len(mesh.vertices)], mesh.vertices)
+    coarse, fine = LaplacianEigenTransformer(eigen_index=(1, 2, 3, 4)).fit_transform(
+        [mesh, (vertices, faces)]
+    )
+    shared = fine.values[: len(mesh.vertices)]
+    error = np.abs(shared - coarse.values).max(axis=0) / np.abs(coarse.values).max(axis=0)
+    assert error[0] < 0.02  # the Fiedler vector
+    assert error.max() < 0.1  # discretization error grows with the frequency
+    np.testing.assert_allclose(fine.eigenvalues, coarse.eigenvalues, rtol=0.03)
+
+
+def test_graph_laplacian_is_not_resolution_invariant():
+    mesh = bumpy(3)
+    vertices, faces = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)
+    est = LaplacianEigenTransformer(laplacian="graph", normalization="none")
+    coarse, fine = est.fit_transform([mesh, (vertices, faces)])
+    # Unit-norm vectors shrink with the vertex count: the paper's trap.
+    ratio = np.abs(coarse.values).max() / np.abs(fine.values).max()
+    assert ratio > 1.5
+
+
+def test_identical_output_for_any_n_jobs_and_runs():
+    meshes = [bumpy(2), ellipsoid(3), bumpy(3)]
+    est = LaplacianEigenTransformer(eigen_index=(1, 2))
+    one = est.set_params(n_jobs=1).transform(meshes)
+    two = est.set_params(n_jobs=2).transform(meshes)
+    again = est.set_params(n_jobs=1).transform(meshes)
+    for a, b, c in zip(one, two, again, strict=True):
+        np.testing.assert_array_equal(a.values, b.values)
+        np.testing.assert_array_equal(a.values, c.values)
+        np.testing.assert_array_equal(a.eigenvalues, b.eigenvalues)
+
+
+def test_repeated_eigenvalue_warns_with_multiplicity():
+    sphere = trimesh.creation.icosphere(3)
+    with pytest.warns(RepeatedEigenvalueWarning, match="sample 0: eigenvalue 1 .*multiplicity 3"):
+        LaplacianEigenTransformer().fit_transform([sphere])
+    with pytest.warns(RepeatedEigenvalueWarning, match="eigenvalue 4 .*multiplicity 5"):
+        LaplacianEigenTransformer(eigen_index=4).fit_transform([sphere])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        LaplacianEigenTransformer(eigen_index=(1, 2, 3)).fit_transform([bumpy()])
+
+
+def _cached_calls(location: Path) -> int:
+    return sum(1 for _ in location.rglob("output.pkl"))
+
+
+def test_memory_solves_each_mesh_once_across_eigen_indices(tmp_path):
+    meshes = [bumpy(2), ellipsoid(2)]
+    memory = joblib.Memory(tmp_path, verbose=0)
+    results = {}
+    for index in (1, 2, 3, 4, 5):
+        est = LaplacianEigenTransformer(eigen_index=index, memory=memory)
+        results[index] = est.fit_transform(meshes)
+    assert _cached_calls(tmp_path) == len(meshes)
+    uncached = LaplacianEigenTransformer(eigen_index=3).fit_transform(meshes)
+    np.testing.assert_array_equal(results[3][1].values, uncached[1].values)
+    # A changed mesh is a new cache entry.
+    moved = trimesh.Trimesh(meshes[0].vertices * 1.01, meshes[0].faces, process=False)
+    LaplacianEigenTransformer(memory=str(tmp_path)).fit_transform([moved])
+    assert _cached_calls(tmp_path) == len(meshes) + 1
+
+
+def test_cleaned_meshes_report_their_vertex_indices():
+    mesh = bumpy(2)
+    vertices = np.vstack([[50.0, 50, 50], mesh.vertices])
+    field = LaplacianEigenTransformer().fit_transform([(vertices, mesh.faces + 1)])[0]
+    np.testing.assert_array_equal(field.vertex_indices, np.arange(1, len(vertices)))
+    reference = LaplacianEigenTransformer().fit_transform([mesh])[0]
+    assert reference.vertex_indices is None
+    np.testing.assert_allclose(field.values, reference.values, atol=1e-10)
+
+
+def test_several_components_policy():
+    big, small = bumpy(2), trimesh.creation.icosphere(1, radius=0.1)
+    vertices = np.vstack([small.vertices, big.vertices])
+    faces = np.vstack([small.faces, big.faces + len(small.vertices)])
+    field = LaplacianEigenTransformer().fit_transform([(vertices, faces)])[0]
+    assert field.n_vertices == len(big.vertices)
+    with pytest.raises(ValueError, match="sample 1: the mesh has 2 connected components"):
+        LaplacianEigenTransformer(components="error").fit_transform([big, (vertices, faces)])
+
+
+@pytest.mark.parametrize(
+    "bad, error, message",
+    [
+        ((np.full((4, 3), np.nan), [[0, 1, 2]]), ValueError, "sample 1: vertex 0"),
+        ((np.eye(3), [[0, 1, 3]]), ValueError, "sample 1: face 0 .* out of range"),
+        ((np.eye(3)[:, :2], [[0, 1, 2]]), ValueError, "sample 1: vertices must"),
+        ("no/such/file.obj", ValueError, "sample 1: mesh file .* does not exist"),
+        (3.14, TypeError, "sample 1: expected"),
+    ],
+)
+def test_bad_meshes_name_the_sample(bad, error, message):
+    with pytest.raises(error, match=message):
+        LaplacianEigenTransformer().fit_transform([bumpy(1), bad])
+
+
+def test_index_beyond_the_vertex_count():
+    triangle = (np.eye(3), np.array([[0, 1, 2]]))
+    with pytest.warns(RepeatedEigenvalueWarning):  # an equilateral triangle
+        field = LaplacianEigenTransformer(eigen_index=2).fit_transform([triangle])[0]
+    assert np.isfinite(field.values).all()
+    with pytest.raises(ValueError, match="sample 0: eigen_index 3 needs at least 4 vertices"):
+        LaplacianEigenTransformer(eigen_index=3).fit_transform([triangle])
+
+
+@pytest.mark.parametrize(
+    "params",
+    [{"eigen_index": -1}, {"eigen_index": ()}, {"eigen_index": (1, -2)}, {"laplacian": "x"}],
+)
+def test_invalid_parameters(params):
+    with pytest.raises(ValueError):
+        LaplacianEigenTransformer(**params).fit([bumpy(1)])
+
+
+def test_single_mesh_instead_of_a_sequence_is_refused():
+    with pytest.raises(TypeError, match="sequence of meshes"):
+        LaplacianEigenTransformer().fit_transform(bumpy(1))
+
+
+def test_clone_params_and_pickle_round_trip():
+    est = LaplacianEigenTransformer(eigen_index=(1, 3), laplacian="graph", n_jobs=2)
+    cloned = clone(est)
+    assert cloned.get_params() == est.get_params()
+    cloned.set_params(eigen_index=2)
+    assert cloned.eigen_index == 2 and est.eigen_index == (1, 3)
+    restored = pickle.loads(pickle.dumps(est.fit([bumpy(1)])))
+    assert restored.get_params() == est.get_params()
+    a = restored.transform([bumpy(2)])[0]
+    b = est.transform([bumpy(2)])[0]
+    np.testing.assert_array_equal(a.values, b.values)
