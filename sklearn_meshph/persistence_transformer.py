@@ -1,0 +1,185 @@
+"""LowerStarPersistence: vertex functions on meshes to persistence diagrams."""
+
+from __future__ import annotations
+
+from numbers import Integral, Real
+
+import numpy as np
+from joblib import Parallel, delayed
+from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
+from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import validate_data
+
+from ._mesh import check_mesh
+from ._utils import as_sample_list
+from .persistence import FILTRATIONS, check_values, edge_adjacency, function_diagrams
+from .scalar_field import ScalarField
+
+__all__ = ["LowerStarPersistence"]
+
+
+def _sample_mesh_and_values(sample, index):
+    if isinstance(sample, ScalarField):
+        return sample.vertices, sample.faces, sample.values
+    if isinstance(sample, tuple | list) and len(sample) == 2:
+        mesh, values = sample
+        vertices, faces = check_mesh(mesh, index=index)
+        return vertices, faces, values
+    raise TypeError(
+        f"sample {index}: expected a ScalarField or a (mesh, values) pair, "
+        f"got {type(sample).__name__}"
+    )
+
+
+def _diagrams_one(sample, index, *, filtration, essential, min_persistence):
+    vertices, faces, values = _sample_mesh_and_values(sample, index)
+    values = check_values(values, len(vertices), index)
+    adjacency = edge_adjacency(faces, len(vertices))
+    columns = [values] if values.ndim == 1 else [values[:, j] for j in range(values.shape[1])]
+    diagrams = []
+    for column in columns:
+        diagrams.extend(
+            function_diagrams(
+                adjacency,
+                np.ascontiguousarray(column),
+                filtration=filtration,
+                essential=essential,
+                min_persistence=min_persistence,
+            )
+        )
+    return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
+
+
+class LowerStarPersistence(TransformerMixin, BaseEstimator):
+    """Persistence diagrams of the lower-star filtrations of vertex functions.
+
+    The second stage of the mesh-learning pipeline: each sample, a :class:`ScalarField`
+    or a ``(mesh, values)`` pair, becomes its H0 persistence diagram(s), computed exactly
+    in float64 by union-find over the vertices in value order (elder rule, ties broken by
+    vertex index), the edge adjacency built once per mesh and shared by its functions.
+
+    Parameters
+    ----------
+    filtration : {"symmetric", "sublevel", "superlevel", "extended"}, default="symmetric"
+        What each function ``f`` contributes (``ess`` are the pairs
+        ``(min, max)`` of ``f`` over each connected component):
+
+        - ``"symmetric"`` (default): two diagrams, ``H0(f) + H0(-f)`` (the finite
+          sublevel pairs of ``f`` and of ``-f``, each in its own function's values,
+          merged into one diagram) and ``ess + R(ess)`` with the reflection
+          ``R(b, d) = (-d, -b)``. Replacing ``f`` by ``-f`` gives exactly the same
+          diagrams: the output does not depend on the eigenvector's sign.
+        - ``"sublevel"``: one diagram, the sublevel H0 of ``f`` with its essential
+          classes treated by ``essential``: the paper's setting.
+        - ``"superlevel"``: the same for ``-f`` (superlevel sets of ``f``, reported
+          as the sublevel pairs of ``-f``).
+        - ``"extended"``: three diagrams, the finite sublevel pairs of ``f``, the
+          finite superlevel pairs of ``f`` as ``R`` of those of ``-f`` (pairs
+          ``(saddle, max)``), and ``ess``: extended H0 persistence. For ``-f`` the
+          three become ``R`` of the second, ``R`` of the first and ``R`` of the third.
+    essential : {"keep", "drop", "max"}, default="keep"
+        Essential classes of ``"sublevel"`` and ``"superlevel"`` (one per component):
+        kept with death ``inf``, dropped, or closed at the component's maximum (the
+        extended pairing). Distances match infinite points only among themselves.
+    min_persistence : float, default=0.0
+        Pairs with ``death - birth <= min_persistence`` are dropped (zero-persistence
+        pairs always are).
+    n_jobs : int, default=None
+        Samples processed in parallel. ``None`` means 1 unless in a
+        :func:`joblib.parallel_backend` context; ``-1`` means all processors.
+
+    See Also
+    --------
+    lower_star_persistence : The H0 diagram of one function.
+    DiagramDistance : The next stage: distances between diagrams.
+
+    Notes
+    -----
+    Output per sample: one function and one diagram (``"sublevel"``/``"superlevel"``)
+    gives an ``(n, 2)`` float64 array; otherwise a tuple of arrays, function-major: for
+    ``ScalarField.values`` of shape ``(n, k)`` and ``"symmetric"``, the tuple is
+    ``(H0_1, ess_1, ..., H0_k, ess_k)``. :class:`DiagramDistance` compares tuples
+    position by position.
+
+    Measured on the 60 Sumner meshes (Fiedler vector of the cotangent Laplacian at unit
+    area, bottleneck, leave-one-out 1-NN): ``"sublevel"`` 0.57, ``"symmetric"`` 0.98;
+    with eigenfunctions 1 to 3, ``"symmetric"`` reaches 1.00.
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> from sklearn_meshph import LowerStarPersistence
+    >>> sphere = trimesh.creation.icosphere(2)
+    >>> height = sphere.vertices[:, 2]
+    >>> sub = LowerStarPersistence(filtration="sublevel").fit_transform([(sphere, height)])
+    >>> sub[0]
+    array([[-1., inf]])
+    >>> h0, ess = LowerStarPersistence().fit_transform([(sphere, height)])[0]
+    >>> ess
+    array([[-1.,  1.],
+           [-1.,  1.]])
+    """
+
+    _parameter_constraints: dict = {
+        "filtration": [StrOptions(set(FILTRATIONS))],
+        "essential": [StrOptions({"keep", "drop", "max"})],
+        "min_persistence": [Interval(Real, 0, None, closed="left")],
+        "n_jobs": [Integral, None],
+    }
+
+    def __init__(self, filtration="symmetric", essential="keep", min_persistence=0.0, n_jobs=None):
+        self.filtration = filtration
+        self.essential = essential
+        self.min_persistence = min_persistence
+        self.n_jobs = n_jobs
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y=None):
+        """Check the parameters; nothing is learned.
+
+        Parameters
+        ----------
+        X : sequence of ScalarField or (mesh, values) pairs
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        validate_data(
+            self, X=as_sample_list(X, "scalar fields"), skip_check_array=True, ensure_2d=False
+        )
+        return self
+
+    def transform(self, X):
+        """Compute the persistence diagram(s) of every sample.
+
+        Parameters
+        ----------
+        X : sequence of ScalarField or (mesh, values) pairs
+
+        Returns
+        -------
+        diagrams : list
+            One entry per sample: an ``(n, 2)`` float64 array, or a tuple of them (see
+            Notes).
+        """
+        self._validate_params()
+        samples = as_sample_list(X, "scalar fields")
+        return Parallel(n_jobs=self.n_jobs)(
+            delayed(_diagrams_one)(
+                sample,
+                i,
+                filtration=self.filtration,
+                essential=self.essential,
+                min_persistence=float(self.min_persistence),
+            )
+            for i, sample in enumerate(samples)
+        )
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.requires_fit = False
+        tags.input_tags.two_d_array = False
+        tags.transformer_tags.preserves_dtype = []
+        return tags
