@@ -177,8 +177,8 @@ def bottleneck_distance(a, b) -> float:
     >>> from sklearn_meshph import bottleneck_distance
     >>> bottleneck_distance([[0.0, 1.0]], [[0.0, 1.25], [0.5, 0.75]])
     0.25
-    >>> bottleneck_distance([], [[0.99, 1.0]])
-    0.005
+    >>> bottleneck_distance([], [[0.5, 1.0]])
+    0.25
     """
     a, b = check_diagram(a, index=0), check_diagram(b, index=1)
     return _bottleneck_checked(a, b)
