@@ -1,0 +1,139 @@
+"""Plotting helpers (matplotlib, the optional ``plot`` extra)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+__all__ = ["plot_diagram", "plot_embedding", "plot_mesh_function"]
+
+
+def _pyplot():
+    try:
+        import matplotlib
+
+        if not os.environ.get("DISPLAY") and not os.environ.get("MPLBACKEND"):
+            matplotlib.use("Agg")  # no screen: render to files
+        import matplotlib.pyplot as plt
+    except ImportError as exc:
+        raise ImportError("plotting needs matplotlib: pip install 'sklearn-meshph[plot]'") from exc
+    return plt
+
+
+def _axes(ax, **kwargs):
+    if ax is not None:
+        return ax
+    return _pyplot().figure(figsize=(5, 4.5)).add_subplot(**kwargs)
+
+
+def plot_diagram(diagram, ax=None, *, labels=None, title=None):
+    """Draw a persistence diagram, or the diagrams of a tuple in several colours.
+
+    Parameters
+    ----------
+    diagram : ndarray of shape (n, 2), or tuple of them
+        Rows (birth, death); infinite deaths are drawn on a line above the points,
+        marked ``inf``.
+    ax : matplotlib Axes, optional
+    labels : sequence of str, optional
+        Legend entries of the diagrams of a tuple (default: ``diagram 0``, ...).
+    title : str, optional
+
+    Returns
+    -------
+    ax : matplotlib Axes
+    """
+    ax = _axes(ax)
+    diagrams = list(diagram) if isinstance(diagram, tuple) else [diagram]
+    diagrams = [np.asarray(d, dtype=float).reshape(-1, 2) for d in diagrams]
+    finite = np.concatenate([d[np.isfinite(d)] for d in diagrams] + [np.zeros(0)])
+    lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+    pad = 0.05 * (hi - lo or 1.0)
+    inf_level = hi + 4 * pad
+    markers = "osD^v<>p*h"
+    for k, d in enumerate(diagrams):
+        deaths = np.where(np.isfinite(d[:, 1]), d[:, 1], inf_level)
+        label = labels[k] if labels is not None else f"diagram {k}" if len(diagrams) > 1 else None
+        ax.scatter(d[:, 0], deaths, s=18, marker=markers[k % len(markers)], label=label, alpha=0.8)
+    ax.plot([lo - pad, inf_level], [lo - pad, inf_level], color="0.5", lw=0.8)
+    if any((~np.isfinite(d[:, 1])).any() for d in diagrams):
+        ax.axhline(inf_level, color="0.5", lw=0.8, ls="--")
+        ax.text(lo - pad, inf_level, " inf", va="bottom", fontsize=8)
+    ax.set_xlabel("birth")
+    ax.set_ylabel("death")
+    if len(diagrams) > 1:
+        ax.legend(fontsize=7, loc="lower right")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_embedding(embedding, labels, target_names=None, ax=None):
+    """Scatter a 2-D embedding (e.g. t-SNE of a distance matrix) coloured by class.
+
+    Parameters
+    ----------
+    embedding : ndarray of shape (n, 2)
+    labels : array-like of shape (n,)
+        Integer class labels.
+    target_names : sequence of str, optional
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    ax : matplotlib Axes
+    """
+    ax = _axes(ax)
+    embedding = np.asarray(embedding)
+    labels = np.asarray(labels)
+    for c in np.unique(labels):
+        name = target_names[c] if target_names is not None else str(c)
+        points = embedding[labels == c]
+        ax.scatter(points[:, 0], points[:, 1], s=22, label=name)
+    ax.legend(fontsize=7, markerscale=0.8)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    return ax
+
+
+def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="coolwarm"):
+    """Draw a function on a triangle mesh (face colour = mean of its vertex values).
+
+    Parameters
+    ----------
+    vertices : ndarray of shape (n, 3), or a ScalarField
+        With a ScalarField, ``faces`` and ``values`` (its first column) come from it.
+    faces : ndarray of shape (m, 3)
+    values : ndarray of shape (n,)
+    ax : matplotlib 3-D Axes, optional
+    cmap : str, default="coolwarm"
+
+    Returns
+    -------
+    ax : matplotlib 3-D Axes
+    """
+    if hasattr(vertices, "values") and hasattr(vertices, "faces"):
+        field = vertices
+        vertices, faces = field.vertices, field.faces
+        values = field.values if field.values.ndim == 1 else field.values[:, 0]
+    plt = _pyplot()
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    ax = _axes(ax, projection="3d")
+    vertices = np.asarray(vertices, dtype=float)
+    faces = np.asarray(faces)
+    face_values = np.asarray(values, dtype=float)[faces].mean(axis=1)
+    norm = plt.Normalize(face_values.min(), face_values.max())
+    colors = plt.get_cmap(cmap)(norm(face_values))
+    ax.add_collection3d(Poly3DCollection(vertices[faces], facecolors=colors, linewidths=0))
+    center = (vertices.max(0) + vertices.min(0)) / 2
+    radius = (vertices.max(0) - vertices.min(0)).max() / 2
+    ax.set_xlim(center[0] - radius, center[0] + radius)
+    ax.set_ylim(center[1] - radius, center[1] + radius)
+    ax.set_zlim(center[2] - radius, center[2] + radius)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_axis_off()
+    mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
+    ax.figure.colorbar(mappable, ax=ax, shrink=0.6)
+    return ax
