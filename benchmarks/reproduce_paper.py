@@ -113,13 +113,14 @@ def main():
     n_jobs = args.n_jobs
     t = time.perf_counter()
     data = load_mesh_folder(args.data)
-    meshes, y, names = list(data.data), np.asarray(data.target), list(data.target_names)
+    meshes, y = list(data.data), np.asarray(data.target)
+    names = [str(n) for n in data.target_names]
     load_time = time.perf_counter() - t
-    print(f"{len(meshes)} meshes, classes {names}; loading {load_time:.2f} s")
+    print(f"{len(meshes)} meshes, classes {', '.join(names)}; loading {load_time:.2f} s")
 
     configurations = [
         (
-            "default (Fiedler, cotangent, sign-invariant diagrams, bottleneck)",
+            "default (eigenfunctions 1-3, cotangent, sign-invariant diagrams, bottleneck)",
             LaplacianEigenTransformer(n_jobs=n_jobs, memory=memory),
             LowerStarPersistence(n_jobs=n_jobs),
             DiagramDistance(n_jobs=n_jobs),
@@ -132,14 +133,20 @@ def main():
         ),
         (
             "cotangent, Fiedler, sublevel H0 only, bottleneck",
-            LaplacianEigenTransformer(n_jobs=n_jobs, memory=memory),
+            LaplacianEigenTransformer(eigen_index=1, n_jobs=n_jobs, memory=memory),
             LowerStarPersistence(filtration="sublevel", n_jobs=n_jobs),
             DiagramDistance(n_jobs=n_jobs),
         ),
         (
-            "eigenfunctions 1-3, sign-invariant diagrams, bottleneck",
-            LaplacianEigenTransformer(eigen_index=(1, 2, 3), n_jobs=n_jobs, memory=memory),
+            "cotangent, Fiedler, sign-invariant diagrams, bottleneck",
+            LaplacianEigenTransformer(eigen_index=1, n_jobs=n_jobs, memory=memory),
             LowerStarPersistence(n_jobs=n_jobs),
+            DiagramDistance(n_jobs=n_jobs),
+        ),
+        (
+            "cotangent, Fiedler, extended (typed) diagrams, bottleneck",
+            LaplacianEigenTransformer(eigen_index=1, n_jobs=n_jobs, memory=memory),
+            LowerStarPersistence(filtration="extended", n_jobs=n_jobs),
             DiagramDistance(n_jobs=n_jobs),
         ),
         (
