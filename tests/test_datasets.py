@@ -1,0 +1,118 @@
+"""Synthetic shapes, mesh folders, plotting and the main job."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from sklearn_meshph import load_mesh_folder, make_shapes
+from sklearn_meshph.__main__ import main
+
+
+def test_make_shapes_is_reproducible_balanced_and_valid():
+    data = make_shapes(n_per_class=3, random_state=7)
+    again = make_shapes(n_per_class=3, random_state=7)
+    assert len(data.data) == 18 and np.bincount(data.target).tolist() == [3] * 6
+    assert list(data.target_names) == ["blob", "snake", "tripod", "quadruped", "star", "hand"]
+    for mesh, other in zip(data.data, again.data, strict=True):
+        np.testing.assert_array_equal(mesh.vertices, other.vertices)
+        assert mesh.is_watertight and mesh.euler_number == 2
+        assert len(mesh.split(only_watertight=False)) == 1
+        assert mesh.area_faces.min() > 0
+    other = make_shapes(n_per_class=3, random_state=8)
+    assert not np.array_equal(data.data[0].vertices, other.data[0].vertices)
+
+
+def test_make_shapes_resolution_does_not_reveal_the_class():
+    meshes, y = make_shapes(n_per_class=20, random_state=0, return_X_y=True)
+    counts = np.array([len(m.vertices) for m in meshes], dtype=float)
+    medians = [np.median(counts[y == c]) for c in range(6)]
+    assert max(medians) / min(medians) < 1.5
+    # 1-NN on the vertex count alone, leave-one-out: near chance (1/6).
+    gaps = np.abs(counts[:, None] - counts[None, :]) + np.diag(np.full(len(y), np.inf))
+    assert np.mean(y[np.argmin(gaps, axis=1)] == y) < 0.4
+
+
+def test_make_shapes_subset_and_errors():
+    meshes, y = make_shapes(n_per_class=2, classes=("star", "blob"), return_X_y=True)
+    assert len(meshes) == 4 and y.tolist() == [0, 0, 1, 1]
+    with pytest.raises(ValueError, match="unknown classes"):
+        make_shapes(classes=("cube",))
+
+
+def write_folder(root):
+    for name, mesh in (("ball", trimesh.creation.icosphere(1)), ("box", trimesh.creation.box())):
+        (root / name).mkdir()
+        mesh.export(root / name / "b.obj")
+        mesh.export(root / name / "a.ply")
+    (root / "_extra").mkdir()
+    trimesh.creation.box().export(root / "_extra" / "ignored.obj")
+    (root / "box" / "notes.txt").write_text("not a mesh")
+
+
+def test_load_mesh_folder(tmp_path):
+    write_folder(tmp_path)
+    data = load_mesh_folder(tmp_path)
+    assert data.target_names.tolist() == ["ball", "box"]
+    assert data.target.tolist() == [0, 0, 1, 1]
+    assert [p.split("/")[-1] for p in data.filenames] == ["a.ply", "b.obj", "a.ply", "b.obj"]
+    assert all(isinstance(m, trimesh.Trimesh) for m in data.data)
+    lazy = load_mesh_folder(tmp_path, load=False)
+    assert lazy.data == list(data.filenames)
+
+
+def test_load_mesh_folder_errors(tmp_path):
+    with pytest.raises(ValueError, match="does not exist"):
+        load_mesh_folder(tmp_path / "missing")
+    with pytest.raises(ValueError, match="no mesh files"):
+        load_mesh_folder(tmp_path)
+
+
+def test_load_sumner_folder(sumner_dir):
+    data = load_mesh_folder(sumner_dir, load=False)
+    assert len(data.data) == 60
+    assert data.target_names.tolist() == ["cat", "elephant", "face", "head", "horse", "lion"]
+    assert np.bincount(data.target).tolist() == [10] * 6
+
+
+def test_plots_are_written(tmp_path):
+    plotting = pytest.importorskip("sklearn_meshph.plotting")
+    plt = plotting._pyplot()
+    fig, axes = plt.subplots(1, 2)
+    diagram = np.array([[0.0, 1.0], [0.2, 0.5], [0.1, np.inf]])
+    plotting.plot_diagram(diagram, ax=axes[0])
+    assert len(axes[0].collections[0].get_offsets()) == 3
+    plotting.plot_diagram((diagram, diagram[:2]), ax=axes[1], labels=["H0", "ess"])
+    assert [len(c.get_offsets()) for c in axes[1].collections] == [3, 2]
+    fig.savefig(tmp_path / "diagrams.png")
+    plt.close(fig)
+    mesh = trimesh.creation.icosphere(1)
+    ax = plotting.plot_mesh_function(mesh.vertices, mesh.faces, mesh.vertices[:, 2])
+    ax.figure.savefig(tmp_path / "mesh.png")
+    ax = plotting.plot_embedding(np.random.default_rng(0).random((6, 2)), [0, 0, 1, 1, 2, 2])
+    assert len(ax.collections) == 3
+    ax.figure.savefig(tmp_path / "embedding.png")
+    assert all((tmp_path / f).stat().st_size > 1000 for f in ("diagrams.png", "mesh.png"))
+
+
+def test_main_job_end_to_end(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    code = main(["--n-per-class", "4", "--folds", "2", "--output", str(tmp_path), "--n-jobs", "1"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "2-fold stratified CV accuracy" in out and "confusion matrix" in out
+    assert "time per stage" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "diagrams.png",
+        "eigenfunctions.png",
+        "tsne.png",
+    ]
+
+
+def test_main_job_on_a_folder_and_help(tmp_path, capsys):
+    write_folder(tmp_path)
+    assert main([str(tmp_path), "--folds", "2", "--no-plots", "--eigen-index", "1"]) == 0
+    assert "4 meshes, 2 classes" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--help"])
+    assert exit_info.value.code == 0
+    assert "--eigen-index" in capsys.readouterr().out
