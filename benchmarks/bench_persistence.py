@@ -1,0 +1,141 @@
+"""Lower-star H0 persistence: sklearn-meshph against gudhi and ripser, same process.
+
+    python benchmarks/bench_persistence.py [--quick]
+
+Icospheres of 2.5k to 655k vertices, two functions (smooth + noise, random). Times are
+medians of repeats; "ours" is the union-find over a prebuilt adjacency (built once per
+mesh and shared by every function on it, timed separately), the anchors get the same
+edge list. Peak memory is the resident-set growth of one run in a fresh subprocess.
+giotto-ph is not run: giotto-tda pins scikit-learn < 1.4 and numpy < 2 (see ANCHORS.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+import trimesh
+
+from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
+
+
+def median_time(func, repeats):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def functions(vertices, rng):
+    return {
+        "smooth+noise": vertices[:, 0]
+        + 0.3 * np.sin(4 * vertices[:, 1])
+        + 0.02 * rng.normal(size=len(vertices)),
+        "random": rng.normal(size=len(vertices)),
+    }
+
+
+def gudhi_h0(edges, values):
+    import gudhi
+
+    tree = gudhi.SimplexTree()
+    tree.insert_batch(np.arange(len(values))[None, :], values)
+    tree.insert_batch(edges.T, np.maximum(values[edges[:, 0]], values[edges[:, 1]]))
+    tree.compute_persistence(persistence_dim_max=False)
+    return tree.persistence_intervals_in_dimension(0)
+
+
+def ripser_h0(edges, values):
+    import scipy.sparse as sp
+    from ripser import ripser
+
+    n = len(values)
+    weights = np.maximum(values[edges[:, 0]], values[edges[:, 1]])
+    matrix = sp.coo_matrix(
+        (
+            np.concatenate([weights, values]),
+            (
+                np.concatenate([edges[:, 0], np.arange(n)]),
+                np.concatenate([edges[:, 1], np.arange(n)]),
+            ),
+        ),
+        shape=(n, n),
+    ).tocsr()
+    return ripser(matrix, maxdim=0, distance_matrix=True)["dgms"][0]
+
+
+def peak_memory(method, subdivisions, function):
+    """Resident-set growth (MB) of one run of ``method`` in a fresh interpreter."""
+    code = f"""
+import resource, json, numpy as np, trimesh, sys
+sys.path.insert(0, {str(__file__.rsplit("/", 1)[0])!r})
+import bench_persistence as b
+from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
+m = trimesh.creation.icosphere({subdivisions})
+v, f = np.asarray(m.vertices), np.asarray(m.faces)
+values = b.functions(v, np.random.default_rng(0))[{function!r}]
+adjacency = edge_adjacency(f, len(v))
+coo = adjacency.tocoo(); keep = coo.row < coo.col
+edges = np.column_stack([coo.row[keep], coo.col[keep]])
+sublevel_h0(adjacency, values)  # compile
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+if {method!r} == "ours": sublevel_h0(adjacency, values)
+elif {method!r} == "gudhi": b.gudhi_h0(edges, values)
+else: b.ripser_h0(edges, values)
+print(json.dumps((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base) / 1024))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    try:
+        return float(out.stdout.strip().splitlines()[-1])
+    except (IndexError, ValueError):
+        return float("nan")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="sizes up to 41k vertices")
+    args = parser.parse_args()
+    sizes = (4, 5, 6) if args.quick else (4, 5, 6, 7, 8)
+    rng = np.random.default_rng(0)
+    print(
+        "| vertices | function | pairs | argsort s | adjacency s | ours s | gudhi s | "
+        "ripser s | ours/gudhi | ours/ripser | ours/argsort | peak MB ours/gudhi |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for sub in sizes:
+        mesh = trimesh.creation.icosphere(sub)
+        vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+        repeats = 7 if len(vertices) < 100_000 else 3
+        adjacency_time = median_time(lambda: edge_adjacency(faces, len(vertices)), repeats)
+        adjacency = edge_adjacency(faces, len(vertices))
+        coo = adjacency.tocoo()
+        keep = coo.row < coo.col
+        edges = np.column_stack([coo.row[keep], coo.col[keep]])
+        for name, values in functions(vertices, rng).items():
+            pairs, _, _ = sublevel_h0(adjacency, values)
+            t_sort = median_time(lambda: np.argsort(values, kind="stable"), repeats)
+            t_ours = median_time(lambda: sublevel_h0(adjacency, values), repeats)
+            t_gudhi = median_time(lambda: gudhi_h0(edges, values), max(1, repeats // 2))
+            t_ripser = median_time(lambda: ripser_h0(edges, values), max(1, repeats // 2))
+            mem_ours = peak_memory("ours", sub, name)
+            mem_gudhi = peak_memory("gudhi", sub, name)
+            print(
+                f"| {len(vertices):,} | {name} | {len(pairs):,} | {t_sort:.4f} | "
+                f"{adjacency_time:.4f} | {t_ours:.4f} | {t_gudhi:.3f} | {t_ripser:.3f} | "
+                f"{t_ours / t_gudhi:.3f} | {t_ours / t_ripser:.3f} | {t_ours / t_sort:.2f} | "
+                f"{mem_ours:.0f}/{mem_gudhi:.0f} |",
+                flush=True,
+            )
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"\npeak resident memory of this process: {peak:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
