@@ -12,7 +12,6 @@ giotto-ph is not run: giotto-tda pins scikit-learn < 1.4 and numpy < 2 (see ANCH
 from __future__ import annotations
 
 import argparse
-import json
 import resource
 import subprocess
 import sys
@@ -24,11 +23,11 @@ import trimesh
 from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
 
 
-def median_time(func, repeats):
+def median_time(repeats, func, *args, **kwargs):
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        func()
+        func(*args, **kwargs)
         times.append(time.perf_counter() - start)
     return float(np.median(times))
 
@@ -113,17 +112,17 @@ def main():
         mesh = trimesh.creation.icosphere(sub)
         vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
         repeats = 7 if len(vertices) < 100_000 else 3
-        adjacency_time = median_time(lambda: edge_adjacency(faces, len(vertices)), repeats)
+        adjacency_time = median_time(repeats, edge_adjacency, faces, len(vertices))
         adjacency = edge_adjacency(faces, len(vertices))
         coo = adjacency.tocoo()
         keep = coo.row < coo.col
         edges = np.column_stack([coo.row[keep], coo.col[keep]])
         for name, values in functions(vertices, rng).items():
             pairs, _, _ = sublevel_h0(adjacency, values)
-            t_sort = median_time(lambda: np.argsort(values, kind="stable"), repeats)
-            t_ours = median_time(lambda: sublevel_h0(adjacency, values), repeats)
-            t_gudhi = median_time(lambda: gudhi_h0(edges, values), max(1, repeats // 2))
-            t_ripser = median_time(lambda: ripser_h0(edges, values), max(1, repeats // 2))
+            t_sort = median_time(repeats, np.argsort, values, kind="stable")
+            t_ours = median_time(repeats, sublevel_h0, adjacency, values)
+            t_gudhi = median_time(max(1, repeats // 2), gudhi_h0, edges, values)
+            t_ripser = median_time(max(1, repeats // 2), ripser_h0, edges, values)
             mem_ours = peak_memory("ours", sub, name)
             mem_gudhi = peak_memory("gudhi", sub, name)
             print(
