@@ -176,7 +176,7 @@ def _finite(matrix: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(matrix), matrix, cap)
 
 
-def write_pictures(output: Path, matrix, y, names, fields, diagrams, random_state):
+def write_pictures(output: Path, matrix, y, names, fields, diagrams, labels, random_state):
     from sklearn.manifold import TSNE
 
     from . import plotting
@@ -198,7 +198,7 @@ def write_pictures(output: Path, matrix, y, names, fields, diagrams, random_stat
     rows = -(-len(examples) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows), squeeze=False)
     for ax, i in zip(axes.ravel(), examples, strict=False):
-        plotting.plot_diagram(diagrams[i], ax=ax)
+        plotting.plot_diagram(diagrams[i], ax=ax, labels=labels)
         ax.set_title(names[y[i]])
     for ax in axes.ravel()[len(examples) :]:
         ax.set_axis_off()
@@ -278,8 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_plots:
         t = time.perf_counter()
         try:
+            labels = persistence.diagram_names(fields[0].n_functions)
             written = write_pictures(
-                args.output, matrix, y, names, fields, diagrams, args.random_state
+                args.output, matrix, y, names, fields, diagrams, labels, args.random_state
             )
         except ImportError as exc:
             print(f"\npictures skipped: {exc}")

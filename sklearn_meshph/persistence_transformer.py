@@ -177,6 +177,28 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
             for i, sample in enumerate(samples)
         )
 
+    def diagram_names(self, n_functions: int = 1) -> list[str]:
+        """Names of the diagrams of one sample, in output order.
+
+        Parameters
+        ----------
+        n_functions : int, default=1
+            Number of functions per sample (columns of ``ScalarField.values``).
+
+        Returns
+        -------
+        list of str
+        """
+        per_function = {
+            "symmetric": ["H0(f) + H0(-f)", "(min, max) + reflected"],
+            "sublevel": ["sublevel H0"],
+            "superlevel": ["superlevel H0"],
+            "extended": ["ordinary H0", "superlevel H0 (saddle, max)", "(min, max)"],
+        }[self.filtration]
+        if n_functions == 1:
+            return per_function
+        return [f"f{k + 1}: {name}" for k in range(n_functions) for name in per_function]
+
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.requires_fit = False
