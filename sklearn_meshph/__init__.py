@@ -2,6 +2,7 @@
 eigenfunctions, as scikit-learn estimators."""
 
 from ._mesh import check_mesh, clean_mesh
+from .converters import from_giotto, from_gudhi, from_persim, to_giotto, to_gudhi, to_persim
 from .datasets import load_mesh_folder, make_shapes
 from .distance_transformer import DiagramDistance
 from .distances import bottleneck_distance, wasserstein_distance
@@ -23,10 +24,16 @@ __all__ = [
     "check_mesh",
     "clean_mesh",
     "cotangent_laplacian",
+    "from_giotto",
+    "from_gudhi",
+    "from_persim",
     "graph_laplacian",
     "laplacian_eigenfunctions",
     "load_mesh_folder",
     "lower_star_persistence",
     "make_shapes",
+    "to_giotto",
+    "to_gudhi",
+    "to_persim",
     "wasserstein_distance",
 ]
