@@ -12,31 +12,9 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._utils import as_sample_list
 from .diagrams import check_sample
-from .distances import _bottleneck_checked, _wasserstein_checked
+from .distances import pack, pair_distances
 
 __all__ = ["DiagramDistance", "pairwise_diagram_distances"]
-
-
-def _sample_distance(a, b, metric, order, internal_p):
-    """Distance between two samples: the typed disjoint union of their diagrams."""
-    if len(a) != len(b):
-        raise ValueError(
-            f"samples have different numbers of diagrams ({len(a)} and {len(b)}); "
-            "use the same LowerStarPersistence settings for all samples"
-        )
-    if metric == "bottleneck":
-        return max((_bottleneck_checked(x, y) for x, y in zip(a, b, strict=True)), default=0.0)
-    total = sum(
-        _wasserstein_checked(x, y, order, internal_p) ** order for x, y in zip(a, b, strict=True)
-    )
-    return total ** (1.0 / order)
-
-
-def _distance_batch(left, right, pairs, metric, order, internal_p):
-    out = np.empty(len(pairs))
-    for k, (i, j) in enumerate(pairs):
-        out[k] = _sample_distance(left[i], right[j], metric, order, internal_p)
-    return out
 
 
 def pairwise_diagram_distances(
@@ -45,26 +23,30 @@ def pairwise_diagram_distances(
     """Distance matrix between two lists of validated samples (tuples of diagrams).
 
     With ``right=None`` the symmetric matrix of ``left`` is computed once per unordered
-    pair. Pairs are split into a few batches per worker.
+    pair. The pairs are split into a few batches per worker, each one compiled loop.
     """
     symmetric = right is None
     right = left if symmetric else right
     n, m = len(left), len(right)
+    n_parts = len(left[0]) if n else 0
     if symmetric:
         rows, cols = np.triu_indices(n, k=1)
     else:
         rows, cols = np.divmod(np.arange(n * m), m)
-    pairs = np.column_stack([rows, cols])
-    n_batches = min(len(pairs), 4 * effective_n_jobs(n_jobs)) or 1
-    batches = np.array_split(pairs, n_batches)
+    packed_left = pack(left)
+    packed_right = packed_left if symmetric else pack(right)
+    n_batches = max(1, min(len(rows), 4 * effective_n_jobs(n_jobs)))
+    bounds = np.linspace(0, len(rows), n_batches + 1).astype(int)
     results = Parallel(n_jobs=n_jobs)(
-        delayed(_distance_batch)(left, right, batch, metric, order, internal_p) for batch in batches
+        delayed(pair_distances)(
+            packed_left, packed_right, rows[a:b], cols[a:b], n_parts, metric, order, internal_p
+        )
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
     )
-    values = np.concatenate(results) if results else np.empty(0)
     matrix = np.zeros((n, m))
-    matrix[rows, cols] = values
+    matrix[rows, cols] = np.concatenate(results) if results else []
     if symmetric:
-        matrix[cols, rows] = values
+        matrix[cols, rows] = matrix[rows, cols]
     return matrix
 
 

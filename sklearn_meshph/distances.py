@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .diagrams import check_diagram
 
@@ -150,9 +149,197 @@ def _bottleneck_finite(a, b):
     return values[lo]
 
 
-def _split(diagram):
-    finite = np.isfinite(diagram[:, 1])
-    return diagram[finite], np.sort(diagram[~finite, 0])
+@numba.njit(cache=True)
+def assignment_cost(cost):
+    """Minimum total cost of a perfect matching in a square cost matrix.
+
+    Shortest augmenting paths with potentials (the Hungarian method, O(n^3)): exact.
+    """
+    n = cost.shape[0]
+    u = np.zeros(n + 1)
+    v = np.zeros(n + 1)
+    match = np.zeros(n + 1, np.int64)  # row (1-based) matched to each column, 0: free
+    way = np.zeros(n + 1, np.int64)
+    slack = np.empty(n + 1)
+    used = np.empty(n + 1, np.bool_)
+    for i in range(1, n + 1):
+        match[0] = i
+        j0 = 0
+        slack[:] = np.inf
+        used[:] = False
+        while True:
+            used[j0] = True
+            i0 = match[j0]
+            delta = np.inf
+            j1 = 0
+            for j in range(1, n + 1):
+                if not used[j]:
+                    reduced = cost[i0 - 1, j - 1] - u[i0] - v[j]
+                    if reduced < slack[j]:
+                        slack[j] = reduced
+                        way[j] = j0
+                    if slack[j] < delta:
+                        delta = slack[j]
+                        j1 = j
+            for j in range(n + 1):
+                if used[j]:
+                    u[match[j]] += delta
+                    v[j] -= delta
+                else:
+                    slack[j] -= delta
+            j0 = j1
+            if match[j0] == 0:
+                break
+        while j0 != 0:
+            j1 = way[j0]
+            match[j0] = match[j1]
+            j0 = j1
+    total = 0.0
+    for j in range(1, n + 1):
+        total += cost[match[j] - 1, j - 1]
+    return total
+
+
+@numba.njit(cache=True)
+def _precedes(a, b):
+    """A total order on diagrams (size, then values), to fix argument order."""
+    if len(a) != len(b):
+        return len(a) < len(b)
+    for i in range(len(a)):
+        for k in range(2):
+            if a[i, k] != b[i, k]:
+                return a[i, k] < b[i, k]
+    return True
+
+
+@numba.njit(cache=True)
+def _ground(dx, dy, internal_p):
+    if np.isinf(internal_p):
+        return max(dx, dy)
+    return (dx**internal_p + dy**internal_p) ** (1.0 / internal_p)
+
+
+@numba.njit(cache=True)
+def _wasserstein_power(a, b, order, internal_p):
+    """Optimal sum of cost^order over matchings of two finite diagrams."""
+    if not _precedes(a, b):  # so that d(a, b) == d(b, a) bit for bit
+        a, b = b, a
+    n, m = len(a), len(b)
+    if n + m == 0:
+        return 0.0
+    diagonal = 1.0 if np.isinf(internal_p) else 2.0 ** (1.0 / internal_p)
+    cost = np.zeros((n + m, n + m))
+    for i in range(n):
+        to_diagonal = ((a[i, 1] - a[i, 0]) / 2.0 * diagonal) ** order
+        for j in range(m):
+            dx = abs(a[i, 0] - b[j, 0])
+            dy = abs(a[i, 1] - b[j, 1])
+            cost[i, j] = _ground(dx, dy, internal_p) ** order
+        for j in range(m, m + n):
+            cost[i, j] = to_diagonal
+    for j in range(m):
+        to_diagonal = ((b[j, 1] - b[j, 0]) / 2.0 * diagonal) ** order
+        for i in range(n, n + m):
+            cost[i, j] = to_diagonal
+    return assignment_cost(cost)
+
+
+@numba.njit(cache=True)
+def _sample_distance(pa, oa, ea, eoa, ia, pb, ob, eb, eob, ib, n_parts, metric, order, internal_p):
+    """Distance between sample ``ia`` of one packed set and ``ib`` of another.
+
+    Parts are compared position by position: the bottleneck distance is the maximum of
+    the per-part distances, the Wasserstein distance the l_q norm of them.
+    """
+    total = 0.0
+    for part in range(n_parts):
+        da = ia * n_parts + part
+        db = ib * n_parts + part
+        a = pa[oa[da] : oa[da + 1]]
+        b = pb[ob[db] : ob[db + 1]]
+        essential_a = ea[eoa[da] : eoa[da + 1]]
+        essential_b = eb[eob[db] : eob[db + 1]]
+        if len(essential_a) != len(essential_b):
+            return np.inf
+        if metric == 0:
+            d = _bottleneck_finite(a, b)
+            for k in range(len(essential_a)):
+                d = max(d, abs(essential_a[k] - essential_b[k]))
+            total = max(total, d)
+        else:
+            total += _wasserstein_power(a, b, order, internal_p)
+            for k in range(len(essential_a)):
+                total += abs(essential_a[k] - essential_b[k]) ** order
+    return total if metric == 0 else total ** (1.0 / order)
+
+
+@numba.njit(cache=True)
+def _pairs_kernel(left, right, rows, cols, n_parts, metric, order, internal_p):
+    pa, oa, ea, eoa = left
+    pb, ob, eb, eob = right
+    out = np.empty(len(rows))
+    for k in range(len(rows)):
+        out[k] = _sample_distance(
+            pa,
+            oa,
+            ea,
+            eoa,
+            rows[k],
+            pb,
+            ob,
+            eb,
+            eob,
+            cols[k],
+            n_parts,
+            metric,
+            order,
+            internal_p,
+        )
+    return out
+
+
+METRICS = {"bottleneck": 0, "wasserstein": 1}
+
+
+def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Validated samples (tuples of diagrams) as four flat arrays for the kernels.
+
+    Finite points of every diagram (sample-major, part-minor) with their offsets, and
+    the sorted births of the essential points with theirs.
+    """
+    finite, essential = [], []
+    for sample in samples:
+        for diagram in sample:
+            keep = np.isfinite(diagram[:, 1])
+            finite.append(diagram[keep])
+            essential.append(np.sort(diagram[~keep, 0]))
+    offsets = np.concatenate([[0], np.cumsum([len(d) for d in finite])]).astype(np.int64)
+    essential_offsets = np.concatenate([[0], np.cumsum([len(e) for e in essential])])
+    points = np.ascontiguousarray(np.vstack(finite)) if finite else np.empty((0, 2))
+    births = np.concatenate(essential) if essential else np.empty(0)
+    return points, offsets, births.astype(np.float64), essential_offsets.astype(np.int64)
+
+
+def pair_distances(left, right, rows, cols, n_parts, metric, order=2.0, internal_p=np.inf):
+    """Distances of the sample pairs ``(rows[k], cols[k])`` of two packed sets."""
+    return _pairs_kernel(
+        left,
+        right,
+        np.asarray(rows, dtype=np.int64),
+        np.asarray(cols, dtype=np.int64),
+        n_parts,
+        METRICS[metric],
+        float(order),
+        float(internal_p),
+    )
+
+
+def _one_pair(a, b, metric, order=2.0, internal_p=np.inf) -> float:
+    a, b = check_diagram(a, index=0), check_diagram(b, index=1)
+    zero = np.zeros(1, dtype=np.int64)
+    return float(
+        pair_distances(pack([(a,)]), pack([(b,)]), zero, zero, 1, metric, order, internal_p)[0]
+    )
 
 
 def bottleneck_distance(a, b) -> float:
@@ -172,6 +359,10 @@ def bottleneck_distance(a, b) -> float:
         diagonal moves no point by more than ``t`` in the L-infinity norm (essential
         points matched among themselves by sorted birth).
 
+    See Also
+    --------
+    wasserstein_distance, DiagramDistance
+
     Examples
     --------
     >>> from sklearn_meshph import bottleneck_distance
@@ -180,17 +371,7 @@ def bottleneck_distance(a, b) -> float:
     >>> bottleneck_distance([], [[0.5, 1.0]])
     0.25
     """
-    a, b = check_diagram(a, index=0), check_diagram(b, index=1)
-    return _bottleneck_checked(a, b)
-
-
-def _bottleneck_checked(a, b) -> float:
-    fa, ea = _split(a)
-    fb, eb = _split(b)
-    if len(ea) != len(eb):
-        return np.inf
-    essential = float(np.max(np.abs(ea - eb))) if len(ea) else 0.0
-    return max(essential, float(_bottleneck_finite(fa, fb)))
+    return _one_pair(a, b, "bottleneck")
 
 
 def wasserstein_distance(a, b, order: float = 2.0, internal_p: float = np.inf) -> float:
@@ -210,39 +391,19 @@ def wasserstein_distance(a, b, order: float = 2.0, internal_p: float = np.inf) -
     float
         ``(min over matchings of sum cost^q)^(1/q)``, solved exactly as an assignment
         problem (no approximation); ``inf`` when the numbers of essential points differ.
+
+    See Also
+    --------
+    bottleneck_distance, DiagramDistance
+
+    Examples
+    --------
+    >>> from sklearn_meshph import wasserstein_distance
+    >>> wasserstein_distance([[0.0, 1.0]], [[0.0, 1.25], [0.5, 0.75]], order=1.0)
+    0.375
     """
-    a, b = check_diagram(a, index=0), check_diagram(b, index=1)
-    return _wasserstein_checked(a, b, float(order), float(internal_p))
-
-
-def _to_diagonal(points, internal_p):
-    half = (points[:, 1] - points[:, 0]) / 2.0
-    if np.isinf(internal_p):
-        return half
-    return half * 2.0 ** (1.0 / internal_p)
-
-
-def _wasserstein_checked(a, b, order, internal_p) -> float:
-    # Rounding in the assignment's sum depends on the argument order: fix one, so that
-    # d(a, b) == d(b, a) bit for bit.
-    if (len(a), a.tobytes()) > (len(b), b.tobytes()):
-        a, b = b, a
-    fa, ea = _split(a)
-    fb, eb = _split(b)
-    if len(ea) != len(eb):
-        return np.inf
-    total = float(np.sum(np.abs(ea - eb) ** order))
-    n, m = len(fa), len(fb)
-    if n + m:
-        diff = np.abs(fa[:, None, :] - fb[None, :, :])
-        if np.isinf(internal_p):
-            ground = diff.max(axis=2)
-        else:
-            ground = (diff**internal_p).sum(axis=2) ** (1.0 / internal_p)
-        cost = np.zeros((n + m, n + m))
-        cost[:n, :m] = ground**order
-        cost[:n, m:] = (_to_diagonal(fa, internal_p) ** order)[:, None]
-        cost[n:, :m] = (_to_diagonal(fb, internal_p) ** order)[None, :]
-        rows, cols = linear_sum_assignment(cost)
-        total += float(cost[rows, cols].sum())
-    return total ** (1.0 / order)
+    if not order >= 1:
+        raise ValueError(f"order must be at least 1, got {order}")
+    if not internal_p >= 1:
+        raise ValueError(f"internal_p must be at least 1, got {internal_p}")
+    return _one_pair(a, b, "wasserstein", order, internal_p)
