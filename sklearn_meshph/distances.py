@@ -224,9 +224,15 @@ def _wasserstein_power(a, b, order, internal_p):
     """Optimal sum of cost^order over matchings of two finite diagrams."""
     if not _precedes(a, b):  # so that d(a, b) == d(b, a) bit for bit
         a, b = b, a
-    n, m = len(a), len(b)
-    if n + m == 0:
+    if len(a) + len(b) == 0:
         return 0.0
+    return assignment_cost(_augmented_costs(a, b, order, internal_p))
+
+
+@numba.njit(cache=True)
+def _augmented_costs(a, b, order, internal_p):
+    """(n + m)-square costs: points to points, points to the diagonal, diagonal to itself."""
+    n, m = len(a), len(b)
     diagonal = 1.0 if np.isinf(internal_p) else 2.0 ** (1.0 / internal_p)
     cost = np.zeros((n + m, n + m))
     for i in range(n):
@@ -241,7 +247,7 @@ def _wasserstein_power(a, b, order, internal_p):
         to_diagonal = ((b[j, 1] - b[j, 0]) / 2.0 * diagonal) ** order
         for i in range(n, n + m):
             cost[i, j] = to_diagonal
-    return assignment_cost(cost)
+    return cost
 
 
 @numba.njit(cache=True)
@@ -320,8 +326,40 @@ def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return points, offsets, births.astype(np.float64), essential_offsets.astype(np.int64)
 
 
+# Above this many points, scipy's C++ assignment solver beats the compiled Hungarian on
+# the degenerate (tied) costs of the diagonal blocks.
+_LARGE = 64
+
+
+def _large_wasserstein(left, right, rows, cols, n_parts, order, internal_p):
+    from scipy.optimize import linear_sum_assignment
+
+    out = np.empty(len(rows))
+    for k, (i, j) in enumerate(zip(rows, cols, strict=True)):
+        total = 0.0
+        for part in range(n_parts):
+            da, db = i * n_parts + part, j * n_parts + part
+            a = left[0][left[1][da] : left[1][da + 1]]
+            b = right[0][right[1][db] : right[1][db + 1]]
+            ea = left[2][left[3][da] : left[3][da + 1]]
+            eb = right[2][right[3][db] : right[3][db + 1]]
+            if len(ea) != len(eb):
+                total = np.inf
+                break
+            if not _precedes(a, b):
+                a, b = b, a
+            cost = _augmented_costs(a, b, order, internal_p)
+            r, c = linear_sum_assignment(cost)
+            total += float(cost[r, c].sum()) + float(np.sum(np.abs(ea - eb) ** order))
+        out[k] = total ** (1.0 / order)
+    return out
+
+
 def pair_distances(left, right, rows, cols, n_parts, metric, order=2.0, internal_p=np.inf):
     """Distances of the sample pairs ``(rows[k], cols[k])`` of two packed sets."""
+    largest = max(np.diff(left[1]).max(initial=0), np.diff(right[1]).max(initial=0))
+    if metric == "wasserstein" and largest > _LARGE:
+        return _large_wasserstein(left, right, rows, cols, n_parts, float(order), float(internal_p))
     return _pairs_kernel(
         left,
         right,
