@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import warnings
 from numbers import Integral
 
@@ -42,6 +43,16 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, n_eigs, seed):
     if normalization == "area":
         M = M / M.diagonal().sum()
     return generalized_eigenpairs(L, M, n_eigs, seed=seed)
+
+
+def _size_hint(mesh) -> int:
+    """A cheap estimate of a mesh's size, for scheduling only."""
+    try:
+        if isinstance(mesh, str | os.PathLike):
+            return os.path.getsize(mesh)
+        return len(mesh.vertices if hasattr(mesh, "vertices") else mesh[0])
+    except (OSError, TypeError, IndexError, KeyError):
+        return 0  # invalid input: check_mesh reports it in the worker
 
 
 def _repeats(values: np.ndarray, i: int) -> np.ndarray:
@@ -255,9 +266,12 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         else:
             seed = int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
         memory = check_memory(self.memory)
-        results = Parallel(n_jobs=self.n_jobs)(
+        # Largest meshes first: workers that finish early pick up the small ones, so a
+        # collection of mixed sizes keeps every worker busy to the end.
+        order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
+        solved = Parallel(n_jobs=self.n_jobs)(
             delayed(_eigen_one)(
-                mesh,
+                meshes[i],
                 i,
                 indices=indices,
                 laplacian=self.laplacian,
@@ -266,8 +280,11 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
                 seed=seed,
                 memory=memory,
             )
-            for i, mesh in enumerate(meshes)
+            for i in order
         )
+        results = [None] * len(meshes)
+        for i, result in zip(order, solved, strict=True):
+            results[i] = result
         fields = []
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
         for i, (clean, values, vectors, vertex_indices) in enumerate(results):
