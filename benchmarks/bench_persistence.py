@@ -5,7 +5,7 @@
 Icospheres of 2.5k to 655k vertices, two functions (smooth + noise, random). Times are
 medians of repeats; "ours" is the union-find over a prebuilt adjacency (built once per
 mesh and shared by every function on it, timed separately), the anchors get the same
-edge list. Peak memory is the resident-set growth of one run in a fresh subprocess.
+edge list. Peak memory is the growth of the resident set during one run (peak reset before it).
 giotto-ph is not run: giotto-tda pins scikit-learn < 1.4 and numpy < 2 (see ANCHORS.md).
 """
 
@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import argparse
 import resource
-import subprocess
-import sys
 import time
 
 import numpy as np
@@ -70,31 +68,24 @@ def ripser_h0(edges, values):
     return ripser(matrix, maxdim=0, distance_matrix=True)["dgms"][0]
 
 
-def peak_memory(method, subdivisions, function):
-    """Resident-set growth (MB) of one run of ``method`` in a fresh interpreter."""
-    code = f"""
-import resource, json, numpy as np, trimesh, sys
-sys.path.insert(0, {str(__file__.rsplit("/", 1)[0])!r})
-import bench_persistence as b
-from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
-m = trimesh.creation.icosphere({subdivisions})
-v, f = np.asarray(m.vertices), np.asarray(m.faces)
-values = b.functions(v, np.random.default_rng(0))[{function!r}]
-adjacency = edge_adjacency(f, len(v))
-coo = adjacency.tocoo(); keep = coo.row < coo.col
-edges = np.column_stack([coo.row[keep], coo.col[keep]])
-sublevel_h0(adjacency, values)  # compile
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-if {method!r} == "ours": sublevel_h0(adjacency, values)
-elif {method!r} == "gudhi": b.gudhi_h0(edges, values)
-else: b.ripser_h0(edges, values)
-print(json.dumps((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base) / 1024))
-"""
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+def _status_mb(field):
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(field):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def peak_memory(func, *args):
+    """Peak resident-set growth (MB) while ``func`` runs (Linux: resets VmHWM first)."""
     try:
-        return float(out.stdout.strip().splitlines()[-1])
-    except (IndexError, ValueError):
+        with open("/proc/self/clear_refs", "w") as refs:
+            refs.write("5")
+    except OSError:
         return float("nan")
+    before = _status_mb("VmRSS")
+    func(*args)
+    return _status_mb("VmHWM") - before
 
 
 def main():
@@ -123,8 +114,8 @@ def main():
             t_ours = median_time(repeats, sublevel_h0, adjacency, values)
             t_gudhi = median_time(max(1, repeats // 2), gudhi_h0, edges, values)
             t_ripser = median_time(max(1, repeats // 2), ripser_h0, edges, values)
-            mem_ours = peak_memory("ours", sub, name)
-            mem_gudhi = peak_memory("gudhi", sub, name)
+            mem_ours = peak_memory(sublevel_h0, adjacency, values)
+            mem_gudhi = peak_memory(gudhi_h0, edges, values)
             print(
                 f"| {len(vertices):,} | {name} | {len(pairs):,} | {t_sort:.4f} | "
                 f"{adjacency_time:.4f} | {t_ours:.4f} | {t_gudhi:.3f} | {t_ripser:.3f} | "
