@@ -7,11 +7,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-N_JOBS_DOC = (
-    "Number of parallel jobs. ``None`` means 1 unless in a "
-    ":func:`joblib.parallel_backend` context; ``-1`` means all processors."
-)
-
 
 def as_sample_list(X, what: str = "meshes") -> list:
     """``X`` as a list of samples, refusing a single sample passed by mistake."""
