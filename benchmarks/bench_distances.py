@@ -16,6 +16,7 @@ import time
 import warnings
 
 import numpy as np
+from _common import median_time
 
 from sklearn_meshph import DiagramDistance, bottleneck_distance, wasserstein_distance
 
@@ -23,15 +24,6 @@ from sklearn_meshph import DiagramDistance, bottleneck_distance, wasserstein_dis
 def random_diagram(rng, n):
     births = rng.random(n)
     return np.column_stack([births, births + rng.random(n) * 0.5])
-
-
-def median_time(repeats, func, *args, **kwargs):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func(*args, **kwargs)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def anchors():

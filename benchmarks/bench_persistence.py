@@ -13,21 +13,12 @@ from __future__ import annotations
 
 import argparse
 import resource
-import time
 
 import numpy as np
 import trimesh
+from _common import median_time
 
 from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
-
-
-def median_time(repeats, func, *args, **kwargs):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func(*args, **kwargs)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def functions(vertices, rng):

@@ -23,3 +23,11 @@ def as_sample_list(X, what: str = "meshes") -> list:
     if not samples:
         raise ValueError(f"X is empty: expected at least one of {what}")
     return samples
+
+
+def sequence_input_tags(tags, *, requires_fit: bool):
+    """Tags of a transformer whose samples are meshes, fields or diagrams, not rows."""
+    tags.requires_fit = requires_fit
+    tags.input_tags.two_d_array = False
+    tags.transformer_tags.preserves_dtype = []
+    return tags

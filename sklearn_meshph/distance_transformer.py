@@ -10,7 +10,7 @@ from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._utils import as_sample_list
+from ._utils import as_sample_list, sequence_input_tags
 from .diagrams import check_sample
 from .distances import pack, pair_distances
 
@@ -189,7 +189,4 @@ class DiagramDistance(TransformerMixin, BaseEstimator):
         return pairwise_diagram_distances(self.diagrams_, **self._kwargs())
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.input_tags.two_d_array = False
-        tags.transformer_tags.preserves_dtype = []
-        return tags
+        return sequence_input_tags(super().__sklearn_tags__(), requires_fit=True)

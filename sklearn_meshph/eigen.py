@@ -15,7 +15,7 @@ from sklearn.utils.validation import check_memory, validate_data
 from threadpoolctl import threadpool_limits
 
 from ._mesh import COMPONENT_POLICIES, check_mesh, clean_mesh
-from ._utils import as_sample_list
+from ._utils import as_sample_list, sequence_input_tags
 from .laplacian import LAPLACIANS, build_laplacian, generalized_eigenpairs
 from .scalar_field import ScalarField
 
@@ -306,8 +306,4 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         return fields
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.requires_fit = False
-        tags.input_tags.two_d_array = False
-        tags.transformer_tags.preserves_dtype = []
-        return tags
+        return sequence_input_tags(super().__sklearn_tags__(), requires_fit=False)

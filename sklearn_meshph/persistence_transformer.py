@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import validate_data
 
 from ._mesh import check_mesh
-from ._utils import as_sample_list
+from ._utils import as_sample_list, sequence_input_tags
 from .persistence import FILTRATIONS, check_values, edge_adjacency, function_diagrams
 from .scalar_field import ScalarField
 
@@ -200,8 +200,4 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
         return [f"f{k + 1}: {name}" for k in range(n_functions) for name in per_function]
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.requires_fit = False
-        tags.input_tags.two_d_array = False
-        tags.transformer_tags.preserves_dtype = []
-        return tags
+        return sequence_input_tags(super().__sklearn_tags__(), requires_fit=False)
