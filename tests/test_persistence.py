@@ -27,16 +27,18 @@ def lower_star_tree(faces, values):
         tree.insert([v], value)
     for face in faces:
         for a, b in ((0, 1), (1, 2), (0, 2)):
-            tree.insert([face[a], face[b]], float(max(values[face[a]], values[face[b]])))
+            if face[a] != face[b]:  # a face with a repeated index still has its edges
+                tree.insert([face[a], face[b]], float(max(values[face[a]], values[face[b]])))
     for face in faces:
-        tree.insert(list(face), float(values[face].max()))
+        if len(set(face)) == 3:
+            tree.insert(list(face), float(values[face].max()))
     return tree
 
 
 def gudhi_h0(vertices, faces, values):
     """Sublevel H0 of the lower-star filtration by gudhi."""
     tree = lower_star_tree(faces, values)
-    tree.compute_persistence(persistence_dim_max=False)
+    tree.compute_persistence(persistence_dim_max=True)  # else a 0-dim complex gives nothing
     diagram = tree.persistence_intervals_in_dimension(0)
     return diagram[diagram[:, 1] > diagram[:, 0]]
 
