@@ -4,6 +4,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import settings
 
 DATA_DIR = Path(
     os.environ.get(
@@ -25,3 +26,10 @@ def sumner_dir():
 def icosphere3():
     mesh = trimesh.creation.icosphere(3)
     return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+
+
+# CI runs the property tests on a fixed set of examples, so that a run is reproducible;
+# locally hypothesis explores new examples every time.
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
