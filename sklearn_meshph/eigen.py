@@ -32,17 +32,21 @@ class RepeatedEigenvalueWarning(UserWarning):
     """The requested eigenvalue is (nearly) repeated: its eigenfunction is not unique."""
 
 
-def mesh_eigenpairs(vertices, faces, laplacian, normalization, n_eigs, seed):
-    """Eigenpairs of one cleaned mesh; the unit of work that ``memory`` caches.
+def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eigs, seed, index):
+    """Clean one validated mesh and solve its eigenpairs: the unit ``memory`` caches.
 
-    With ``normalization="area"`` the cotangent mass matrix is divided by the total area
-    (the mesh scaled to unit area) and the graph Laplacian gets ``M = I / n``, so that
+    The cache key is the input mesh's content and the settings (``index``, the sample's
+    position, is ignored), so a hit skips the cleaning too. With
+    ``normalization="area"`` the cotangent mass matrix is divided by the total area (the
+    mesh scaled to unit area) and the graph Laplacian gets ``M = I / n``, so that
     eigenvectors have unit mean square whatever the scale and the vertex count.
     """
-    L, M = build_laplacian(vertices, faces, laplacian)
+    clean = clean_mesh(vertices, faces, components=components, index=index)
+    L, M = build_laplacian(clean.vertices, clean.faces, laplacian)
     if normalization == "area":
         M = M / M.diagonal().sum()
-    return generalized_eigenpairs(L, M, n_eigs, seed=seed)
+    values, vectors = generalized_eigenpairs(L, M, min(n_eigs, len(clean.vertices)), seed=seed)
+    return clean, values, vectors
 
 
 def _size_hint(mesh) -> int:
@@ -63,15 +67,14 @@ def _repeats(values: np.ndarray, i: int) -> np.ndarray:
 def _eigen_one(mesh, index, *, indices, laplacian, normalization, components, seed, memory):
     with threadpool_limits(limits=1, user_api="blas"):
         vertices, faces = check_mesh(mesh, index=index)
-        clean = clean_mesh(vertices, faces, components=components, index=index)
-        n = len(clean.vertices)
-        solve = memory.cache(mesh_eigenpairs)
+        solve = memory.cache(mesh_eigenpairs, ignore=["index"])
         n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
         while True:
-            n_eigs = min(n_eigs, n)
-            values, vectors = solve(
-                clean.vertices, clean.faces, laplacian, normalization, n_eigs, seed
+            clean, values, vectors = solve(
+                vertices, faces, laplacian, normalization, components, n_eigs, seed, index
             )
+            n = len(clean.vertices)
+            n_eigs = min(n_eigs, n)
             # A repeated eigenvalue that reaches the last computed one may go on: solve
             # a larger block so that the warning can state its whole multiplicity.
             cut = any(
