@@ -134,14 +134,13 @@ def _reflect(diagram: np.ndarray) -> np.ndarray:
 
 def function_diagrams(adjacency, values, *, filtration, essential, min_persistence):
     """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence)."""
-    sub, sub_ess, roots = sublevel_h0(adjacency, values)
     if filtration in ("sublevel", "superlevel"):
         if filtration == "superlevel":
-            sub, sub_ess, roots = sublevel_h0(adjacency, -values)
             values = -values
-        ess = _essential(sub_ess, values, roots, adjacency, essential)
-        diagrams = [np.vstack([sub, ess])]
+        pairs, births, roots = sublevel_h0(adjacency, values)
+        diagrams = [np.vstack([pairs, _essential(births, values, roots, adjacency, essential)])]
     else:
+        sub, _, roots = sublevel_h0(adjacency, values)
         sup, _, _ = sublevel_h0(adjacency, -values)
         extremes = _component_extremes(values, roots, adjacency)
         if filtration == "extended":
