@@ -203,3 +203,14 @@ def test_clone_params_and_pickle_round_trip():
     a = restored.transform([bumpy(2)])[0]
     b = est.transform([bumpy(2)])[0]
     np.testing.assert_array_equal(a.values, b.values)
+
+
+def test_a_corrupted_cache_entry_is_recomputed(tmp_path):
+    mesh = bumpy(2)
+    est = LaplacianEigenTransformer(memory=str(tmp_path))
+    first = est.fit_transform([mesh])[0]
+    (entry,) = list(tmp_path.rglob("output.pkl"))
+    entry.write_bytes(b"not a pickle")
+    again = est.fit_transform([mesh])[0]
+    np.testing.assert_array_equal(again.values, first.values)
+    assert entry.read_bytes() != b"not a pickle"  # rewritten
