@@ -102,3 +102,27 @@ def test_clone_params_and_pickle():
     np.testing.assert_array_equal(restored.transform(diagrams), fitted.transform(diagrams))
     with pytest.raises(ValueError):
         DiagramDistance(metric="cosine").fit(diagrams)
+
+
+def test_identical_on_a_dask_cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    from sklearn_meshph import LaplacianEigenTransformer, LowerStarPersistence, make_shapes
+
+    meshes, _ = make_shapes(n_per_class=1, random_state=0, return_X_y=True)
+    diagrams = random_diagrams(20, seed=6, parts=2)
+    local_fields = LaplacianEigenTransformer(eigen_index=1).fit_transform(meshes)
+    local = DiagramDistance(metric="wasserstein").fit_transform(diagrams)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster),
+        parallel_backend("dask"),
+    ):
+        remote = DiagramDistance(metric="wasserstein", n_jobs=-1).fit_transform(diagrams)
+        fields = LaplacianEigenTransformer(eigen_index=1, n_jobs=-1).fit_transform(meshes)
+        remote_diagrams = LowerStarPersistence(n_jobs=-1).fit_transform(fields)
+    np.testing.assert_array_equal(remote, local)
+    for a, b in zip(fields, local_fields, strict=True):
+        np.testing.assert_array_equal(a.values, b.values)
+    assert len(remote_diagrams) == len(meshes)
