@@ -17,36 +17,77 @@ from .distances import pack, pair_distances
 __all__ = ["DiagramDistance", "pairwise_diagram_distances"]
 
 
+# Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
+_MAX_TASK_PAIRS = 1_000_000
+
+
+def _row_blocks(n_rows, pairs_per_row, n_tasks):
+    """Boundaries of consecutive row blocks holding about equal numbers of pairs."""
+    cumulative = np.concatenate([[0], np.cumsum(pairs_per_row)])
+    targets = np.linspace(0, cumulative[-1], n_tasks + 1)
+    bounds = np.unique(np.searchsorted(cumulative, targets, side="left"))
+    bounds[0], bounds[-1] = 0, n_rows
+    return np.unique(bounds)
+
+
+def _block_distances(left, right, start, stop, n_cols, symmetric, n_parts, metric, order, p):
+    """Distances of rows ``start:stop`` (to the later columns only when symmetric)."""
+    if symmetric:
+        rows = np.concatenate([np.full(n_cols - i - 1, i) for i in range(start, stop)])
+        cols = np.concatenate([np.arange(i + 1, n_cols) for i in range(start, stop)])
+    else:
+        rows, cols = np.divmod(np.arange(start * n_cols, stop * n_cols), n_cols)
+    return pair_distances(left, right, rows, cols, n_parts, metric, order, p)
+
+
 def pairwise_diagram_distances(
-    left, right=None, *, metric="bottleneck", order=2.0, internal_p=np.inf, n_jobs=None
+    left,
+    right=None,
+    *,
+    metric="bottleneck",
+    order=2.0,
+    internal_p=np.inf,
+    n_jobs=None,
+    dtype=np.float64,
+    out=None,
 ) -> np.ndarray:
     """Distance matrix between two lists of validated samples (tuples of diagrams).
 
     With ``right=None`` the symmetric matrix of ``left`` is computed once per unordered
-    pair. The pairs are split into a few batches per worker, each one compiled loop.
+    pair. Rows are split into blocks of about equal work, a few per worker and at most
+    a million pairs each, every block one compiled loop; the pair indices are made
+    inside the workers, so memory stays bounded whatever the number of samples.
+    ``out`` (e.g. a :class:`numpy.memmap`) receives the matrix instead of a new array.
     """
     symmetric = right is None
     right = left if symmetric else right
     n, m = len(left), len(right)
     n_parts = len(left[0]) if n else 0
-    if symmetric:
-        rows, cols = np.triu_indices(n, k=1)
-    else:
-        rows, cols = np.divmod(np.arange(n * m), m)
     packed_left = pack(left)
     packed_right = packed_left if symmetric else pack(right)
-    n_batches = max(1, min(len(rows), 4 * effective_n_jobs(n_jobs)))
-    bounds = np.linspace(0, len(rows), n_batches + 1).astype(int)
-    results = Parallel(n_jobs=n_jobs)(
-        delayed(pair_distances)(
-            packed_left, packed_right, rows[a:b], cols[a:b], n_parts, metric, order, internal_p
+    pairs_per_row = np.arange(n - 1, -1, -1) if symmetric else np.full(n, m)
+    total = int(pairs_per_row.sum())
+    n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
+    bounds = _row_blocks(n, pairs_per_row, n_tasks)
+    matrix = np.zeros((n, m), dtype=dtype) if out is None else out
+    tasks = Parallel(n_jobs=n_jobs, return_as="generator")(
+        delayed(_block_distances)(
+            packed_left, packed_right, a, b, m, symmetric, n_parts, metric, order, internal_p
         )
         for a, b in zip(bounds[:-1], bounds[1:], strict=True)
     )
-    matrix = np.zeros((n, m))
-    matrix[rows, cols] = np.concatenate(results) if results else []
+    for a, b, values in zip(bounds[:-1], bounds[1:], tasks, strict=True):
+        if symmetric:
+            position = 0
+            for i in range(a, b):
+                row = values[position : position + n - i - 1]
+                matrix[i, i + 1 :] = row
+                matrix[i + 1 :, i] = row
+                position += n - i - 1
+        else:
+            matrix[a:b] = values.reshape(b - a, m)
     if symmetric:
-        matrix[cols, rows] = matrix[rows, cols]
+        matrix[np.arange(n), np.arange(n)] = 0
     return matrix
 
 
@@ -73,6 +114,10 @@ class DiagramDistance(TransformerMixin, BaseEstimator):
         :func:`joblib.parallel_backend` context; ``-1`` means all processors. Pairs are
         split into a few batches per worker; results are identical for any ``n_jobs``
         and joblib backend.
+    dtype : {"float64", "float32"}, default="float64"
+        Precision of the returned matrix. Distances are computed in float64 either way;
+        ``"float32"`` halves the memory of very large matrices (20,000 samples: 1.6 GB
+        instead of 3.2 GB).
 
     Attributes
     ----------
@@ -113,13 +158,17 @@ class DiagramDistance(TransformerMixin, BaseEstimator):
         "order": [Interval(Real, 1, None, closed="left")],
         "internal_p": [Interval(Real, 1, None, closed="both")],
         "n_jobs": [Integral, None],
+        "dtype": [StrOptions({"float64", "float32"})],
     }
 
-    def __init__(self, metric="bottleneck", order=2.0, internal_p=np.inf, n_jobs=None):
+    def __init__(
+        self, metric="bottleneck", order=2.0, internal_p=np.inf, n_jobs=None, dtype="float64"
+    ):
         self.metric = metric
         self.order = order
         self.internal_p = internal_p
         self.n_jobs = n_jobs
+        self.dtype = dtype
 
     def _check_samples(self, X):
         samples = [check_sample(s, i) for i, s in enumerate(as_sample_list(X, "diagrams"))]
@@ -152,6 +201,7 @@ class DiagramDistance(TransformerMixin, BaseEstimator):
             order=float(self.order),
             internal_p=float(self.internal_p),
             n_jobs=self.n_jobs,
+            dtype=np.dtype(self.dtype),
         )
 
     def transform(self, X):

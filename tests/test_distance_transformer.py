@@ -126,3 +126,22 @@ def test_identical_on_a_dask_cluster():
     for a, b in zip(fields, local_fields, strict=True):
         np.testing.assert_array_equal(a.values, b.values)
     assert len(remote_diagrams) == len(meshes)
+
+
+def test_many_blocks_float32_and_memmap_output(tmp_path, monkeypatch):
+    from sklearn_meshph import distance_transformer
+
+    monkeypatch.setattr(distance_transformer, "_MAX_TASK_PAIRS", 50)  # many small blocks
+    diagrams = random_diagrams(60, seed=7)
+    reference = np.array([[bottleneck_distance(a, b) for b in diagrams] for a in diagrams])
+    blocked = DiagramDistance(n_jobs=2).fit_transform(diagrams)
+    np.testing.assert_array_equal(blocked, reference)
+    single = DiagramDistance(dtype="float32").fit_transform(diagrams)
+    assert single.dtype == np.float32
+    np.testing.assert_allclose(single, reference, rtol=1e-6)
+    samples = [(d,) for d in diagrams]
+    out = np.lib.format.open_memmap(tmp_path / "d.npy", mode="w+", shape=(60, 60))
+    distance_transformer.pairwise_diagram_distances(samples, out=out, n_jobs=2)
+    np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), reference)
+    rectangle = DiagramDistance().fit(diagrams[:7]).transform(diagrams)
+    np.testing.assert_array_equal(rectangle, reference[:, :7])
