@@ -1,24 +1,35 @@
 """Lower-star H0 persistence: sklearn-meshph against gudhi and ripser, same process.
 
-    python benchmarks/bench_persistence.py [--quick]
+    python benchmarks/bench_persistence.py [--quick] [--accuracy]
 
 Icospheres of 2.5k to 655k vertices, two functions (smooth + noise, random). Times are
 medians of repeats; "ours" is the union-find over a prebuilt adjacency (built once per
 mesh and shared by every function on it, timed separately), the anchors get the same
 edge list. Peak memory is the growth of the resident set during one run (peak reset before it).
 giotto-ph is not run: giotto-tda pins scikit-learn < 1.4 and numpy < 2 (see ANCHORS.md).
+
+``--accuracy`` instead measures what each filtration is worth on the 60 Sumner meshes
+(path from SKLEARN_MESHPH_DATA, default ../shared/data): leave-one-out 1-NN accuracy from
+bottleneck distances between the diagrams of the Fiedler vector (cotangent Laplacian, unit
+area), with the eigen stage's sign, with random signs (mean of 5 draws) and with the
+minimum of the distance over the sign of one sample.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import resource
+from pathlib import Path
 
 import numpy as np
 import trimesh
 from _common import median_time
 
 from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
+
+FILTRATIONS = ("sublevel", "extended", "symmetric")
 
 
 def functions(vertices, rng):
@@ -79,10 +90,64 @@ def peak_memory(func, *args):
     return _status_mb("VmHWM") - before
 
 
+def loo_accuracy(matrix, y):
+    from sklearn.model_selection import LeaveOneOut
+    from sklearn.neighbors import KNeighborsClassifier
+
+    correct = 0
+    for train, test in LeaveOneOut().split(matrix, y):
+        knn = KNeighborsClassifier(n_neighbors=1, metric="precomputed")
+        knn.fit(matrix[np.ix_(train, train)], y[train])
+        correct += int(knn.predict(matrix[np.ix_(test, train)])[0] == y[test][0])
+    return correct / len(y)
+
+
+def accuracy_table():
+    from sklearn_meshph import (
+        DiagramDistance,
+        LaplacianEigenTransformer,
+        LowerStarPersistence,
+        load_mesh_folder,
+    )
+
+    root = Path(__file__).resolve().parents[1]
+    data_dir = Path(os.environ.get("SKLEARN_MESHPH_DATA", root / ".." / "shared" / "data"))
+    data = load_mesh_folder(data_dir / "sumner")
+    y = np.asarray(data.target)
+    fields = LaplacianEigenTransformer(eigen_index=1, n_jobs=2).fit_transform(data.data)
+    flipped = [dataclasses.replace(f, values=-f.values) for f in fields]
+    rng = np.random.default_rng(0)
+    print("| filtration | LOO, eigen stage's sign | LOO, random signs | LOO, min over sign |")
+    print("|---|---|---|---|")
+    for filtration in FILTRATIONS:
+        persistence = LowerStarPersistence(filtration=filtration)
+        plus, minus = persistence.transform(fields), persistence.transform(flipped)
+        distance = DiagramDistance(metric="bottleneck")
+        matrix = distance.fit_transform(plus)
+        across = distance.fit(minus).transform(plus)
+        random_signs = []
+        for _ in range(5):
+            flip = rng.random(len(y)) < 0.5
+            mixed = [m if s else p for p, m, s in zip(plus, minus, flip, strict=True)]
+            random_signs.append(loo_accuracy(distance.fit_transform(mixed), y))
+        print(
+            f"| {filtration} | {loo_accuracy(matrix, y):.3f} | {np.mean(random_signs):.3f} "
+            f"({min(random_signs):.3f}-{max(random_signs):.3f}) | "
+            f"{loo_accuracy(np.minimum(matrix, across), y):.3f} |",
+            flush=True,
+        )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="sizes up to 41k vertices")
+    parser.add_argument(
+        "--accuracy", action="store_true", help="accuracy of each filtration on Sumner data"
+    )
     args = parser.parse_args()
+    if args.accuracy:
+        accuracy_table()
+        return
     sizes = (4, 5, 6) if args.quick else (4, 5, 6, 7, 8)
     rng = np.random.default_rng(0)
     print(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from ._mesh import check_mesh, mesh_edges
 
@@ -104,6 +105,32 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
         the elder rule with ties broken by vertex index, zero-persistence pairs dropped,
         then one essential class (death ``inf``) per connected component, born at its
         minimum.
+
+    See Also
+    --------
+    LowerStarPersistence : Diagrams of many samples, superlevel and extended persistence.
+
+    Notes
+    -----
+    Vertices are sorted by value (stable: ties broken by vertex index, a total order) and
+    added one at a time to a union-find over the edge adjacency; when a vertex joins
+    components, all but the oldest (the one with the earliest minimum) die at its value.
+    Triangles do not change H0, so only edges are used. The result equals the H0 diagram
+    of the lower-star filtration computed by gudhi's ``SimplexTree``, bit for bit.
+
+    References
+    ----------
+    .. [1] H. Edelsbrunner and J. Harer, "Computational Topology: An Introduction",
+       AMS, 2010, section VII.1 (union-find for 0-dimensional persistence).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)
+    >>> faces = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> lower_star_persistence((vertices, faces), [0.0, 3.0, 2.0, 1.0])
+    array([[ 1.,  2.],
+           [ 0., inf]])
     """
     vertices, faces = check_mesh(mesh)
     values = check_values(values, len(vertices))
@@ -112,6 +139,7 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
 
 
 def check_values(values, n_vertices: int, index: int | None = None) -> np.ndarray:
+    """Vertex values as float64, shape ``(n_vertices,)`` or ``(n_vertices, k)``, finite."""
     where = "values" if index is None else f"sample {index}"
     values = np.asarray(values, dtype=np.float64)
     if values.ndim not in (1, 2) or values.shape[0] != n_vertices:
@@ -147,15 +175,12 @@ def function_diagrams(adjacency, values, *, filtration, essential, min_persisten
             diagrams = [sub, _reflect(sup), extremes]
         else:
             diagrams = [np.vstack([sub, sup]), np.vstack([extremes, _reflect(extremes)])]
-    if min_persistence > 0:
-        diagrams = [d[(d[:, 1] - d[:, 0]) > min_persistence] for d in diagrams]
-    return diagrams
+    # Also drops the (min, max) pair of a component where the function is constant.
+    return [d[(d[:, 1] - d[:, 0]) > min_persistence] for d in diagrams]
 
 
 def _component_extremes(values, roots, adjacency):
     """(min, max) of each connected component, in the order of the minima's ranks."""
-    from scipy.sparse.csgraph import connected_components
-
     _, labels = connected_components(adjacency, directed=False)
     maxima = np.full(labels.max() + 1, -np.inf)
     np.maximum.at(maxima, labels, values)

@@ -1,16 +1,12 @@
-"""Lower-star persistence against gudhi, sign symmetry, and the transformer."""
-
-import pickle
+"""Lower-star persistence: gudhi as the oracle for sublevel and extended H0, sign symmetry."""
 
 import numpy as np
 import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from sklearn.base import clone
 
-from sklearn_meshph import LowerStarPersistence, ScalarField, lower_star_persistence
-from sklearn_meshph.persistence import edge_adjacency, function_diagrams
+from sklearn_meshph.persistence import edge_adjacency, function_diagrams, lower_star_persistence
 
 gudhi = pytest.importorskip("gudhi")
 
@@ -91,45 +87,108 @@ def test_float64_values_are_not_rounded():
     assert len(np.unique(diagram[:, 0])) == len(diagram)
 
 
-def test_extended_matches_gudhi_extended_persistence():
-    vertices, faces = sphere(2)
-    values = vertices[:, 0] + 0.3 * np.sin(5 * vertices[:, 1]) + 0.2 * vertices[:, 2] ** 2
+def diagrams_of(vertices, faces, values, filtration="extended"):
+    adjacency = edge_adjacency(faces, len(vertices))
+    return function_diagrams(
+        adjacency, values, filtration=filtration, essential="keep", min_persistence=0.0
+    )
+
+
+def torus(n_major=24, n_minor=12):
+    mesh = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.4, major_sections=n_major, minor_sections=n_minor
+    )
+    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+
+
+def two_spheres():
+    a, fa = sphere(1)
+    b, fb = sphere(2)
+    return np.vstack([a, b + 3.0]), np.vstack([fa, fb + len(a)])
+
+
+def gudhi_extended(faces, values):
+    """gudhi's extended persistence, as our three diagrams and gudhi's H1 parts."""
     tree = lower_star_tree(faces, values)
     tree.extend_filtration()
-    ordinary, relative, extended_plus, _ = tree.extended_persistence()
+    ordinary, relative, extended_plus, extended_minus = tree.extended_persistence()
     ord0 = [p for dim, p in ordinary if dim == 0]
-    rel1 = [(d, b) for dim, (b, d) in relative if dim == 1]  # (saddle, max)
+    rel1 = [(d, b) for dim, (b, d) in relative if dim == 1]  # reported (max, saddle)
     ext0 = [p for dim, p in extended_plus if dim == 0]
-    ours = LowerStarPersistence(filtration="extended").fit_transform([(sphere(2), values)])[0]
-    for mine, reference in zip(ours, (ord0, rel1, ext0), strict=True):
-        np.testing.assert_allclose(sorted_rows(mine), sorted_rows(reference), rtol=1e-12)
+    ord1 = [p for dim, p in ordinary if dim == 1]
+    ext1 = [p for dim, p in extended_plus + extended_minus if dim == 1]
+    return (ord0, rel1, ext0), ord1, ext1
+
+
+def smooth_function(vertices):
+    return vertices[:, 0] + 0.3 * np.sin(5 * vertices[:, 1]) + 0.2 * vertices[:, 2] ** 2
+
+
+@pytest.mark.parametrize(
+    "mesh", [sphere(2), torus(), two_spheres()], ids=["sphere", "torus", "two spheres"]
+)
+def test_extended_matches_gudhi_extended_persistence(mesh):
+    vertices, faces = mesh
+    values = smooth_function(vertices)
+    reference, _, _ = gudhi_extended(faces, values)
+    ours = diagrams_of(vertices, faces, values)
+    for mine, expected in zip(ours, reference, strict=True):
+        expected = np.asarray(expected, dtype=float).reshape(-1, 2)
+        expected = expected[expected[:, 1] > expected[:, 0]]
+        # extend_filtration rescales values and back: equal up to the last bit
+        np.testing.assert_allclose(sorted_rows(mine), sorted_rows(expected), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("mesh, genus", [(sphere(2), 0), (torus(), 1)], ids=["sphere", "torus"])
+def test_ordinary_h1_of_a_closed_surface_is_the_reflected_superlevel_h0(mesh, genus):
+    vertices, faces = mesh
+    values = smooth_function(vertices) + 0.05 * np.random.default_rng(4).normal(size=len(vertices))
+    _, ord1, ext1 = gudhi_extended(faces, values)
+    _, saddle_max, _ = diagrams_of(vertices, faces, values)
+    ord1 = np.asarray(ord1, dtype=float).reshape(-1, 2)
+    np.testing.assert_allclose(  # gudhi rescales
+        sorted_rows(saddle_max), sorted_rows(ord1[ord1[:, 1] > ord1[:, 0]]), rtol=0, atol=1e-12
+    )
+    assert len(ext1) == 2 * genus  # the essential H1 pairs, which we do not compute
 
 
 def reflect(diagram):
     return np.column_stack([-diagram[:, 1], -diagram[:, 0]])
 
 
-def test_sign_flip_reflects_the_diagrams():
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31), levels=st.sampled_from([None, 3]))
+def test_sign_flip_reflects_extended_and_fixes_symmetric(seed, levels):
+    vertices, faces = sphere(2)
+    rng = np.random.default_rng(seed)
+    values = (
+        rng.normal(size=len(vertices))
+        if levels is None
+        else rng.integers(0, levels, len(vertices)).astype(float)
+    )
+    plus = diagrams_of(vertices, faces, values)
+    minus = diagrams_of(vertices, faces, -values)
+    for mine, reflected in zip(minus, (plus[1], plus[0], plus[2]), strict=True):
+        np.testing.assert_array_equal(sorted_rows(mine), sorted_rows(reflect(reflected)))
+    symmetric_plus = diagrams_of(vertices, faces, values, "symmetric")
+    symmetric_minus = diagrams_of(vertices, faces, -values, "symmetric")
+    for a, b in zip(symmetric_plus, symmetric_minus, strict=True):
+        np.testing.assert_array_equal(sorted_rows(a), sorted_rows(b))
+
+
+def test_superlevel_is_the_sublevel_diagram_of_the_negated_function():
     vertices, faces = sphere(3)
     values = vertices[:, 2] + 0.2 * np.random.default_rng(2).normal(size=len(vertices))
-    est = LowerStarPersistence(filtration="extended")
-    plus, minus = est.fit_transform([((vertices, faces), values), ((vertices, faces), -values)])
-    np.testing.assert_array_equal(sorted_rows(minus[0]), sorted_rows(reflect(plus[1])))
-    np.testing.assert_array_equal(sorted_rows(minus[1]), sorted_rows(reflect(plus[0])))
-    np.testing.assert_array_equal(sorted_rows(minus[2]), sorted_rows(reflect(plus[2])))
-    sub = LowerStarPersistence(filtration="sublevel").fit_transform([((vertices, faces), -values)])
-    sup = LowerStarPersistence(filtration="superlevel").fit_transform([((vertices, faces), values)])
-    np.testing.assert_array_equal(sub[0], sup[0])
+    (sup,) = diagrams_of(vertices, faces, values, "superlevel")
+    np.testing.assert_array_equal(sup, lower_star_persistence((vertices, faces), -values))
 
 
-def test_default_output_is_exactly_sign_invariant():
-    vertices, faces = sphere(3)
-    values = np.column_stack([vertices[:, 2] ** 3 + vertices[:, 0], vertices[:, 1]])
-    est = LowerStarPersistence()
-    plus, minus = est.fit_transform([((vertices, faces), values), ((vertices, faces), -values)])
-    assert len(plus) == 4  # (H0, essential) for each of the two functions
-    for a, b in zip(plus, minus, strict=True):
-        np.testing.assert_array_equal(sorted_rows(a), sorted_rows(b))
+def test_constant_component_leaves_no_diagonal_point():
+    vertices, faces = two_spheres()
+    values = np.zeros(len(vertices))
+    values[:42] = np.arange(42.0)  # the second sphere is constant
+    _, extremes = diagrams_of(vertices, faces, values, "symmetric")
+    np.testing.assert_array_equal(sorted_rows(extremes), [[-41.0, 0.0], [0.0, 41.0]])
 
 
 @settings(max_examples=40, deadline=None)
@@ -149,69 +208,6 @@ def test_random_graphs_match_gudhi(n, seed, levels):
     np.testing.assert_array_equal(sorted_rows(finite), sorted_rows(ref[np.isfinite(ref[:, 1])]))
     assert np.isinf(ours[:, 1]).sum() == np.isinf(ref[:, 1]).sum()
     assert (ours[:, 1] > ours[:, 0]).all()
-
-
-def test_transformer_accepts_fields_and_pairs_alike():
-    vertices, faces = sphere(2)
-    values = np.column_stack([vertices[:, 0], vertices[:, 1] ** 2])
-    field = ScalarField(vertices, faces, values)
-    est = LowerStarPersistence(filtration="sublevel")
-    from_field, from_pair = est.fit_transform([field, ((vertices, faces), values)])
-    assert isinstance(from_field, tuple) and len(from_field) == 2
-    for a, b in zip(from_field, from_pair, strict=True):
-        np.testing.assert_array_equal(a, b)
-    single = est.fit_transform([((vertices, faces), values[:, 1])])[0]
-    np.testing.assert_array_equal(single, from_field[1])
-
-
-def test_essential_policies_and_min_persistence():
-    vertices, faces = sphere(2)
-    values = vertices[:, 0] + 0.1 * np.sin(7 * vertices[:, 1])
-    sample = [((vertices, faces), values)]
-    keep = LowerStarPersistence(filtration="sublevel").fit_transform(sample)[0]
-    drop = LowerStarPersistence(filtration="sublevel", essential="drop").fit_transform(sample)[0]
-    close = LowerStarPersistence(filtration="sublevel", essential="max").fit_transform(sample)[0]
-    assert np.isinf(keep[:, 1]).sum() == 1 and np.isfinite(drop).all()
-    np.testing.assert_array_equal(close[-1], [values.min(), values.max()])
-    pruned = LowerStarPersistence(filtration="sublevel", min_persistence=0.05).fit_transform(
-        sample
-    )[0]
-    assert ((pruned[:, 1] - pruned[:, 0]) > 0.05).all()
-    assert len(pruned) < len(keep)
-
-
-@pytest.mark.parametrize(
-    "values, message",
-    [
-        (np.zeros(5), r"sample 1: values must have shape \(42,\)"),
-        (np.full(42, np.nan), "sample 1: values contain NaN"),
-    ],
-)
-def test_bad_values_name_the_sample(values, message):
-    vertices, faces = sphere(1)
-    good = ((vertices, faces), vertices[:, 0])
-    with pytest.raises(ValueError, match=message):
-        LowerStarPersistence().fit_transform([good, ((vertices, faces), values)])
-
-
-def test_bad_sample_type():
-    with pytest.raises(TypeError, match="sample 0: expected a ScalarField"):
-        LowerStarPersistence().fit_transform([np.zeros(3)])
-
-
-def test_identical_for_any_n_jobs_clone_and_pickle():
-    vertices, faces = sphere(2)
-    rng = np.random.default_rng(3)
-    samples = [((vertices, faces), rng.normal(size=len(vertices))) for _ in range(5)]
-    est = LowerStarPersistence(filtration="extended")
-    one = est.fit_transform(samples)
-    two = clone(est).set_params(n_jobs=2).fit_transform(samples)
-    again = pickle.loads(pickle.dumps(est)).transform(samples)
-    for a, b, c in zip(one, two, again, strict=True):
-        for x, y, z in zip(a, b, c, strict=True):
-            np.testing.assert_array_equal(x, y)
-            np.testing.assert_array_equal(x, z)
-    assert clone(est).get_params() == est.get_params()
 
 
 def test_adjacency_is_symmetric_without_self_loops():

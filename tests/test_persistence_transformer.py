@@ -1,0 +1,158 @@
+"""LowerStarPersistence: inputs, output layout, policies, sign invariance, estimator contract."""
+
+import pickle
+
+import numpy as np
+import pytest
+import trimesh
+from sklearn.base import clone
+
+from sklearn_meshph.persistence import lower_star_persistence
+from sklearn_meshph.persistence_transformer import LowerStarPersistence
+from sklearn_meshph.scalar_field import ScalarField
+
+
+def sorted_rows(diagram):
+    diagram = np.asarray(diagram, dtype=float).reshape(-1, 2)
+    return diagram[np.lexsort(diagram.T[::-1])]
+
+
+def sphere(subdivisions=2):
+    mesh = trimesh.creation.icosphere(subdivisions)
+    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+
+
+def test_default_output_is_exactly_sign_invariant():
+    vertices, faces = sphere(3)
+    values = np.column_stack([vertices[:, 2] ** 3 + vertices[:, 0], vertices[:, 1]])
+    est = LowerStarPersistence()
+    plus, minus = est.fit_transform([((vertices, faces), values), ((vertices, faces), -values)])
+    assert len(plus) == 4  # (H0, essential) for each of the two functions
+    for a, b in zip(plus, minus, strict=True):
+        np.testing.assert_array_equal(sorted_rows(a), sorted_rows(b))
+
+
+def test_transformer_accepts_fields_and_pairs_alike():
+    vertices, faces = sphere(2)
+    values = np.column_stack([vertices[:, 0], vertices[:, 1] ** 2])
+    field = ScalarField(vertices, faces, values)
+    est = LowerStarPersistence(filtration="sublevel")
+    from_field, from_pair = est.fit_transform([field, ((vertices, faces), values)])
+    assert isinstance(from_field, tuple) and len(from_field) == 2
+    for a, b in zip(from_field, from_pair, strict=True):
+        np.testing.assert_array_equal(a, b)
+    single = est.fit_transform([((vertices, faces), values[:, 1])])[0]
+    np.testing.assert_array_equal(single, from_field[1])
+
+
+def test_essential_policies_and_min_persistence():
+    vertices, faces = sphere(2)
+    values = vertices[:, 0] + 0.1 * np.sin(7 * vertices[:, 1])
+    sample = [((vertices, faces), values)]
+    keep = LowerStarPersistence(filtration="sublevel").fit_transform(sample)[0]
+    drop = LowerStarPersistence(filtration="sublevel", essential="drop").fit_transform(sample)[0]
+    close = LowerStarPersistence(filtration="sublevel", essential="max").fit_transform(sample)[0]
+    assert np.isinf(keep[:, 1]).sum() == 1 and np.isfinite(drop).all()
+    np.testing.assert_array_equal(close[-1], [values.min(), values.max()])
+    pruned = LowerStarPersistence(filtration="sublevel", min_persistence=0.05).fit_transform(
+        sample
+    )[0]
+    assert ((pruned[:, 1] - pruned[:, 0]) > 0.05).all()
+    assert len(pruned) < len(keep)
+
+
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        (np.zeros(5), r"sample 1: values must have shape \(42,\)"),
+        (np.full(42, np.nan), "sample 1: values contain NaN"),
+    ],
+)
+def test_bad_values_name_the_sample(values, message):
+    vertices, faces = sphere(1)
+    good = ((vertices, faces), vertices[:, 0])
+    with pytest.raises(ValueError, match=message):
+        LowerStarPersistence().fit_transform([good, ((vertices, faces), values)])
+
+
+def test_bad_sample_type():
+    with pytest.raises(TypeError, match="sample 0: expected a ScalarField"):
+        LowerStarPersistence().fit_transform([np.zeros(3)])
+
+
+def test_identical_for_any_n_jobs_clone_and_pickle():
+    vertices, faces = sphere(2)
+    rng = np.random.default_rng(3)
+    samples = [((vertices, faces), rng.normal(size=len(vertices))) for _ in range(5)]
+    est = LowerStarPersistence(filtration="extended")
+    one = est.fit_transform(samples)
+    two = clone(est).set_params(n_jobs=2).fit_transform(samples)
+    again = pickle.loads(pickle.dumps(est)).transform(samples)
+    for a, b, c in zip(one, two, again, strict=True):
+        for x, y, z in zip(a, b, c, strict=True):
+            np.testing.assert_array_equal(x, y)
+            np.testing.assert_array_equal(x, z)
+    assert clone(est).get_params() == est.get_params()
+
+
+def test_sublevel_setting_is_the_papers_single_diagram():
+    vertices, faces = sphere(3)
+    values = vertices[:, 0] + 0.1 * np.sin(9 * vertices[:, 2])
+    (diagram,) = LowerStarPersistence(filtration="sublevel").fit_transform(
+        [((vertices, faces), values)]
+    )
+    assert isinstance(diagram, np.ndarray) and diagram.dtype == np.float64
+    np.testing.assert_array_equal(diagram, lower_star_persistence((vertices, faces), values))
+
+
+@pytest.mark.parametrize(
+    "filtration, per_function",
+    [("symmetric", 2), ("sublevel", 1), ("superlevel", 1), ("extended", 3)],
+)
+def test_several_functions_are_function_major_and_named(filtration, per_function):
+    vertices, faces = sphere(2)
+    values = np.column_stack([vertices[:, 0], vertices[:, 1] ** 3, vertices[:, 2]])
+    est = LowerStarPersistence(filtration=filtration)
+    (together,) = est.fit_transform([((vertices, faces), values)])
+    together = together if isinstance(together, tuple) else (together,)
+    assert len(together) == 3 * per_function == len(est.diagram_names(3))
+    for k in range(3):
+        (alone,) = est.fit_transform([((vertices, faces), values[:, k])])
+        alone = alone if isinstance(alone, tuple) else (alone,)
+        assert len(alone) == per_function == len(est.diagram_names())
+        for a, b in zip(together[k * per_function : (k + 1) * per_function], alone, strict=True):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_essential_classes_one_per_component():
+    a, fa = sphere(1)
+    b, fb = sphere(1)
+    vertices, faces = np.vstack([a, b + 3.0]), np.vstack([fa, fb + len(a)])
+    values = vertices[:, 0]
+    sample = [((vertices, faces), values)]
+    keep = LowerStarPersistence(filtration="sublevel").fit_transform(sample)[0]
+    closed = LowerStarPersistence(filtration="sublevel", essential="max").fit_transform(sample)[0]
+    np.testing.assert_array_equal(keep[np.isinf(keep[:, 1]), 0], [-1.0, 2.0])
+    np.testing.assert_array_equal(sorted_rows(closed[-2:]), [[-1.0, 1.0], [2.0, 4.0]])
+    _, extremes = LowerStarPersistence().fit_transform(sample)[0]
+    np.testing.assert_array_equal(
+        sorted_rows(extremes), [[-4.0, -2.0], [-1.0, 1.0], [-1.0, 1.0], [2.0, 4.0]]
+    )
+
+
+def test_fit_is_stateless_and_a_single_sample_is_refused():
+    vertices, faces = sphere(1)
+    est = LowerStarPersistence()
+    assert est.fit([((vertices, faces), vertices[:, 0])]) is est
+    assert not [k for k in vars(est) if k.endswith("_")]
+    with pytest.raises(TypeError, match="sequence of scalar fields"):
+        est.fit_transform(ScalarField(vertices, faces, vertices[:, 0]))
+
+
+def test_invalid_parameters_are_refused_at_fit():
+    vertices, faces = sphere(1)
+    sample = [((vertices, faces), vertices[:, 0])]
+    with pytest.raises(ValueError, match="filtration"):
+        LowerStarPersistence(filtration="upper").fit(sample)
+    with pytest.raises(ValueError, match="min_persistence"):
+        LowerStarPersistence(min_persistence=-1.0).fit(sample)
