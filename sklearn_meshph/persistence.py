@@ -160,8 +160,12 @@ def _reflect(diagram: np.ndarray) -> np.ndarray:
     return np.column_stack([-diagram[:, 1], -diagram[:, 0]])
 
 
-def function_diagrams(adjacency, values, *, filtration, essential, min_persistence):
-    """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence)."""
+def function_diagrams(adjacency, values, *, filtration, essential, min_persistence, surface=None):
+    """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence).
+
+    ``surface`` (from ``closed_surface_edges``, built once per mesh) enables the essential
+    H1 diagram of ``"extended"``; without it that diagram is empty.
+    """
     if filtration in ("sublevel", "superlevel"):
         if filtration == "superlevel":
             values = -values
@@ -172,7 +176,8 @@ def function_diagrams(adjacency, values, *, filtration, essential, min_persisten
         sup, _, _ = sublevel_h0(adjacency, -values)
         extremes = _component_extremes(values, roots, adjacency)
         if filtration == "extended":
-            diagrams = [sub, _reflect(sup), extremes]
+            ext1 = np.empty((0, 2)) if surface is None else essential_h1_pairs(values, surface)
+            diagrams = [sub, _reflect(sup), extremes, ext1[ext1[:, 0] < ext1[:, 1]]]
         else:
             diagrams = [np.vstack([sub, sup]), np.vstack([extremes, _reflect(extremes)])]
     # Also drops the (min, max) pair of a component where the function is constant.
@@ -193,3 +198,153 @@ def _essential(births, values, roots, adjacency, policy):
     if policy == "max":
         return _component_extremes(values, roots, adjacency)
     return np.column_stack([births, np.full(len(births), np.inf)])
+
+
+def closed_surface_edges(faces: np.ndarray, n_vertices: int):
+    """Edges ``(e, 2)`` and their two faces ``(e, 2)``; None unless every edge has two faces."""
+    half = np.sort(np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    if len(half) == 0 or (half[:, 0] == half[:, 1]).any():
+        return None
+    key = half[:, 0] * np.int64(n_vertices) + half[:, 1]
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    if len(key) % 2 or (key[0::2] != key[1::2]).any() or (key[2::2] == key[1:-1:2]).any():
+        return None
+    face_of = order // 3
+    return half[order[0::2]], np.column_stack([face_of[0::2], face_of[1::2]])
+
+
+@numba.njit(cache=True)
+def _spanning_forest(n_nodes, ends, edge_order):
+    """Edges kept by Kruskal's algorithm scanning ``edge_order``."""
+    parent = np.arange(n_nodes)
+    used = np.zeros(len(ends), dtype=np.bool_)
+    for e in edge_order:
+        a = _find(parent, ends[e, 0])
+        b = _find(parent, ends[e, 1])
+        if a != b:
+            parent[a] = b
+            used[e] = True
+    return used
+
+
+@numba.njit(cache=True)
+def _rooted_forest(n_nodes, ends, used):
+    """Parent node, parent edge and depth of every node of the forest of ``used`` edges."""
+    degree = np.zeros(n_nodes + 1, dtype=np.int64)
+    for e in range(len(ends)):
+        if used[e]:
+            degree[ends[e, 0] + 1] += 1
+            degree[ends[e, 1] + 1] += 1
+    indptr = np.cumsum(degree)
+    fill = indptr[:-1].copy()
+    incident = np.empty(indptr[-1], dtype=np.int64)
+    for e in range(len(ends)):
+        if used[e]:
+            for a in (ends[e, 0], ends[e, 1]):
+                incident[fill[a]] = e
+                fill[a] += 1
+    parent = np.full(n_nodes, -1, dtype=np.int64)
+    parent_edge = np.full(n_nodes, -1, dtype=np.int64)
+    depth = np.zeros(n_nodes, dtype=np.int64)
+    queue = np.empty(n_nodes, dtype=np.int64)
+    for root in range(n_nodes):
+        if parent[root] != -1:
+            continue
+        parent[root] = root
+        head, tail = 0, 1
+        queue[0] = root
+        while head < tail:
+            a = queue[head]
+            head += 1
+            for k in range(indptr[a], indptr[a + 1]):
+                e = incident[k]
+                b = ends[e, 0] + ends[e, 1] - a
+                if parent[b] == -1:
+                    parent[b] = a
+                    parent_edge[b] = e
+                    depth[b] = depth[a] + 1
+                    queue[tail] = b
+                    tail += 1
+    return parent, parent_edge, depth
+
+
+@numba.njit(cache=True)
+def _xor_along_paths(pairs, parent, parent_edge, depth, labels, out):
+    """``out[k] ^= labels[e]`` for every edge ``e`` of the forest path between ``pairs[k]``."""
+    for k in range(len(pairs)):
+        a, b = pairs[k, 0], pairs[k, 1]
+        while a != b:
+            if depth[a] < depth[b]:
+                a, b = b, a
+            out[k] ^= labels[parent_edge[a]]
+            a = parent[a]
+
+
+def _essential_cycles(values, edges, edge_faces, n_vertices):
+    """Tree-cotree split of a closed surface for the lower-star order of ``values``.
+
+    Returns the edges that create an H1 class which neither the sublevel sweep kills
+    (they are not in the primal spanning forest, scanned upwards) nor is dual to an H0
+    merge of the faces scanned downwards (the dual spanning forest): the ``2g`` births
+    of essential H1, in filtration order, with both forests.
+    """
+    rank = np.empty(len(values), dtype=np.int64)
+    rank[np.argsort(values, kind="stable")] = np.arange(len(values))
+    ranks = rank[edges]
+    order = np.argsort(ranks.max(axis=1) * np.int64(len(values)) + ranks.min(axis=1))
+    tree = _spanning_forest(n_vertices, edges, order)
+    cotree = _spanning_forest(int(edge_faces.max()) + 1, edge_faces, order[::-1])
+    return order[~(tree | cotree)[order]], tree, cotree
+
+
+def essential_h1_pairs(values: np.ndarray, surface) -> np.ndarray:
+    """Extended persistence of the essential H1 classes of a closed surface (Ext1).
+
+    ``surface`` is the output of ``closed_surface_edges``. Rows (birth, death): birth
+    when the class appears in the sublevel sweep, death when it enters the image of a
+    superlevel set's H1. Computed over Z/2 as the relative position of the two flags
+    of H1 (classes born below a level, classes coming from above a level), in the
+    coordinates given by intersection numbers with the dual loops of a tree-cotree
+    decomposition.
+    """
+    edges, edge_faces = surface
+    n_vertices = len(values)
+    up, _, up_cotree = _essential_cycles(values, edges, edge_faces, n_vertices)
+    down, down_tree, _ = _essential_cycles(-values, edges, edge_faces, n_vertices)
+    if len(up) == 0:
+        return np.empty((0, 2))
+    words = (len(up) + 63) // 64
+    bits = np.uint64(1) << (np.arange(len(up)) % 64).astype(np.uint64)
+    # labels[e] holds the dual loops (one per class born upwards) that cross edge e
+    labels = np.zeros((len(edges), words), dtype=np.uint64)
+    labels[up, np.arange(len(up)) // 64] = bits
+    parent, parent_edge, depth = _rooted_forest(int(edge_faces.max()) + 1, edge_faces, up_cotree)
+    marks = np.zeros((len(up), words), dtype=np.uint64)
+    marks[np.arange(len(up)), np.arange(len(up)) // 64] = bits
+    _mark_dual_loops(edge_faces[up], parent, parent_edge, depth, marks, labels)
+    parent, parent_edge, depth = _rooted_forest(n_vertices, edges, down_tree)
+    coordinates = labels[down].copy()
+    _xor_along_paths(edges[down], parent, parent_edge, depth, labels, coordinates)
+    pivots: dict[int, int] = {}
+    pairs = []
+    for j, row in enumerate(coordinates):
+        vector = sum(int(w) << (64 * i) for i, w in enumerate(row))
+        while vector and (vector.bit_length() - 1) in pivots:
+            vector ^= pivots[vector.bit_length() - 1]
+        low = vector.bit_length() - 1
+        pivots[low] = vector
+        pairs.append((values[edges[up[low]]].max(), values[edges[down[j]]].min()))
+    return np.array(pairs, dtype=np.float64)
+
+
+@numba.njit(cache=True)
+def _mark_dual_loops(face_pairs, parent, parent_edge, depth, marks, labels):
+    """``labels[e] ^= marks[k]`` for the cotree edges on the dual path of loop ``k``."""
+    for k in range(len(face_pairs)):
+        a, b = face_pairs[k, 0], face_pairs[k, 1]
+        while a != b:
+            if depth[a] < depth[b]:
+                a, b = b, a
+            labels[parent_edge[a]] ^= marks[k]
+            a = parent[a]

@@ -6,7 +6,12 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sklearn_meshph.persistence import edge_adjacency, function_diagrams, lower_star_persistence
+from sklearn_meshph.persistence import (
+    closed_surface_edges,
+    edge_adjacency,
+    function_diagrams,
+    lower_star_persistence,
+)
 
 gudhi = pytest.importorskip("gudhi")
 
@@ -90,7 +95,12 @@ def test_float64_values_are_not_rounded():
 def diagrams_of(vertices, faces, values, filtration="extended"):
     adjacency = edge_adjacency(faces, len(vertices))
     return function_diagrams(
-        adjacency, values, filtration=filtration, essential="keep", min_persistence=0.0
+        adjacency,
+        values,
+        filtration=filtration,
+        essential="keep",
+        min_persistence=0.0,
+        surface=closed_surface_edges(faces, len(vertices)),
     )
 
 
@@ -115,9 +125,10 @@ def gudhi_extended(faces, values):
     ord0 = [p for dim, p in ordinary if dim == 0]
     rel1 = [(d, b) for dim, (b, d) in relative if dim == 1]  # reported (max, saddle)
     ext0 = [p for dim, p in extended_plus if dim == 0]
+    ext1_plus = [p for dim, p in extended_plus if dim == 1]
     ord1 = [p for dim, p in ordinary if dim == 1]
-    ext1 = [p for dim, p in extended_plus + extended_minus if dim == 1]
-    return (ord0, rel1, ext0), ord1, ext1
+    ext1_minus = [p for dim, p in extended_minus if dim == 1]
+    return (ord0, rel1, ext0, ext1_plus), ord1, ext1_minus
 
 
 def smooth_function(vertices):
@@ -140,16 +151,22 @@ def test_extended_matches_gudhi_extended_persistence(mesh):
 
 
 @pytest.mark.parametrize("mesh, genus", [(sphere(2), 0), (torus(), 1)], ids=["sphere", "torus"])
-def test_ordinary_h1_of_a_closed_surface_is_the_reflected_superlevel_h0(mesh, genus):
+def test_h1_of_a_closed_surface_is_determined_by_the_returned_diagrams(mesh, genus):
     vertices, faces = mesh
     values = smooth_function(vertices) + 0.05 * np.random.default_rng(4).normal(size=len(vertices))
-    _, ord1, ext1 = gudhi_extended(faces, values)
-    _, saddle_max, _ = diagrams_of(vertices, faces, values)
+    _, ord1, ext1_minus = gudhi_extended(faces, values)
+    _, saddle_max, _, ext1_plus = diagrams_of(vertices, faces, values)
     ord1 = np.asarray(ord1, dtype=float).reshape(-1, 2)
     np.testing.assert_allclose(  # gudhi rescales
         sorted_rows(saddle_max), sorted_rows(ord1[ord1[:, 1] > ord1[:, 0]]), rtol=0, atol=1e-12
     )
-    assert len(ext1) == 2 * genus  # the essential H1 pairs, which we do not compute
+    assert len(ext1_plus) == len(ext1_minus) == genus  # Ext1- is Ext1+ transposed
+    np.testing.assert_allclose(
+        sorted_rows(ext1_plus),
+        sorted_rows(np.asarray(ext1_minus, dtype=float).reshape(-1, 2)[:, ::-1]),
+        rtol=0,
+        atol=1e-12,
+    )
 
 
 def reflect(diagram):
@@ -159,7 +176,7 @@ def reflect(diagram):
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**31), levels=st.sampled_from([None, 3]))
 def test_sign_flip_reflects_extended_and_fixes_symmetric(seed, levels):
-    vertices, faces = sphere(2)
+    vertices, faces = torus()
     rng = np.random.default_rng(seed)
     values = (
         rng.normal(size=len(vertices))
@@ -168,12 +185,39 @@ def test_sign_flip_reflects_extended_and_fixes_symmetric(seed, levels):
     )
     plus = diagrams_of(vertices, faces, values)
     minus = diagrams_of(vertices, faces, -values)
-    for mine, reflected in zip(minus, (plus[1], plus[0], plus[2]), strict=True):
+    for mine, reflected in zip(minus, (plus[1], plus[0], plus[2], plus[3]), strict=True):
         np.testing.assert_array_equal(sorted_rows(mine), sorted_rows(reflect(reflected)))
     symmetric_plus = diagrams_of(vertices, faces, values, "symmetric")
     symmetric_minus = diagrams_of(vertices, faces, -values, "symmetric")
     for a, b in zip(symmetric_plus, symmetric_minus, strict=True):
         np.testing.assert_array_equal(sorted_rows(a), sorted_rows(b))
+
+
+def two_tori():
+    a, fa = torus()
+    b, fb = torus(16, 10)
+    return np.vstack([a, b[:, ::-1] + 3.0]), np.vstack([fa, fb + len(a)])
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31), levels=st.sampled_from([None, 3]))
+def test_essential_h1_matches_gudhi_on_tori(seed, levels):
+    vertices, faces = two_tori()
+    rng = np.random.default_rng(seed)
+    n = len(vertices)
+    smooth = vertices @ rng.normal(size=3) + 0.3 * np.sin(rng.uniform(1, 6) * vertices[:, 0])
+    values = smooth if levels is None else rng.integers(0, levels, n).astype(float)
+    reference, _, _ = gudhi_extended(faces, values)
+    ext1 = diagrams_of(vertices, faces, values)[3]
+    expected = np.asarray(reference[3], dtype=float).reshape(-1, 2)
+    np.testing.assert_allclose(sorted_rows(ext1), sorted_rows(expected), rtol=0, atol=1e-12)
+
+
+def test_essential_h1_is_empty_with_a_boundary():
+    vertices, faces = torus()
+    values = vertices[:, 0] + 0.3 * vertices[:, 2]
+    assert len(diagrams_of(vertices, faces, values)[3]) == 1
+    assert len(diagrams_of(vertices, faces[1:], values)[3]) == 0
 
 
 def test_superlevel_is_the_sublevel_diagram_of_the_negated_function():

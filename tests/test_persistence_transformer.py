@@ -107,7 +107,7 @@ def test_sublevel_setting_is_the_papers_single_diagram():
 
 @pytest.mark.parametrize(
     "filtration, per_function",
-    [("symmetric", 2), ("sublevel", 1), ("superlevel", 1), ("extended", 3)],
+    [("symmetric", 2), ("sublevel", 1), ("superlevel", 1), ("extended", 4)],
 )
 def test_several_functions_are_function_major_and_named(filtration, per_function):
     vertices, faces = sphere(2)
