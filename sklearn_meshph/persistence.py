@@ -201,7 +201,10 @@ def _essential(births, values, roots, adjacency, policy):
 
 
 def closed_surface_edges(faces: np.ndarray, n_vertices: int):
-    """Edges ``(e, 2)`` and their two faces ``(e, 2)``; None unless every edge has two faces."""
+    """Edges ``(e, 2)``, their two faces ``(e, 2)`` and the first Betti number.
+
+    None unless every edge has exactly two faces (a closed surface).
+    """
     half = np.sort(np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
     if len(half) == 0 or (half[:, 0] == half[:, 1]).any():
         return None
@@ -211,7 +214,15 @@ def closed_surface_edges(faces: np.ndarray, n_vertices: int):
     if len(key) % 2 or (key[0::2] != key[1::2]).any() or (key[2::2] == key[1:-1:2]).any():
         return None
     face_of = order // 3
-    return half[order[0::2]], np.column_stack([face_of[0::2], face_of[1::2]])
+    edges = half[order[0::2]]
+    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (n_vertices,) * 2)
+    used = np.zeros(n_vertices, dtype=bool)
+    used[edges.ravel()] = True
+    n_components = connected_components(graph, directed=False)[0] - (~used).sum()
+    euler = used.sum() - len(edges) + len(faces)
+    # first Betti number (2g on orientable components): 0 means no essential H1 to compute
+    betti_1 = 2 * n_components - euler
+    return edges, np.column_stack([face_of[0::2], face_of[1::2]]), int(betti_1)
 
 
 @numba.njit(cache=True)
@@ -308,7 +319,9 @@ def essential_h1_pairs(values: np.ndarray, surface) -> np.ndarray:
     coordinates given by intersection numbers with the dual loops of a tree-cotree
     decomposition.
     """
-    edges, edge_faces = surface
+    edges, edge_faces, betti_1 = surface
+    if betti_1 == 0:
+        return np.empty((0, 2))
     n_vertices = len(values)
     up, _, up_cotree = _essential_cycles(values, edges, edge_faces, n_vertices)
     down, down_tree, _ = _essential_cycles(-values, edges, edge_faces, n_vertices)
