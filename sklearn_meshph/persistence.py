@@ -134,6 +134,11 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
     """
     vertices, faces = check_mesh(mesh)
     values = check_values(values, len(vertices))
+    if values.ndim != 1:
+        raise ValueError(
+            f"values must have shape ({len(vertices)},), got {values.shape}: for several "
+            "functions on one mesh use LowerStarPersistence, which shares the adjacency"
+        )
     pairs, essential, _ = sublevel_h0(edge_adjacency(faces, len(vertices)), values)
     return np.vstack([pairs, np.column_stack([essential, np.full(len(essential), np.inf)])])
 

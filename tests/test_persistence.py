@@ -84,6 +84,19 @@ def test_real_mesh_matches_gudhi(sumner_dir):
     np.testing.assert_array_equal(sorted_rows(ours), sorted_rows(ref))
 
 
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        (np.zeros(41), r"shape \(42,\) or \(42, k\)"),
+        (np.zeros((42, 2)), "use LowerStarPersistence"),
+        (np.r_[np.zeros(41), np.inf], "NaN or inf"),
+    ],
+)
+def test_bad_values_are_refused(values, message):
+    with pytest.raises(ValueError, match=message):
+        lower_star_persistence(sphere(1), values)
+
+
 def test_float64_values_are_not_rounded():
     vertices, faces = sphere(1)
     values = 1.0 + np.arange(len(vertices)) * 1e-12  # distinct in float64, equal in float32
