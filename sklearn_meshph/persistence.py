@@ -33,12 +33,14 @@ def _union_find_h0(values, order, indptr, indices):
     the roots of the surviving components.
     """
     n = len(values)
-    rank = np.empty(n, dtype=np.int64)
+    # Indices in the adjacency's integer type: int32 below 2**31 entries, which halves
+    # the memory traffic of this cache-bound loop.
+    rank = np.empty(n, dtype=order.dtype)
     for r in range(n):
         rank[order[r]] = r
-    parent = np.arange(n)
-    births = np.empty(n, dtype=np.int64)
-    deaths = np.empty(n, dtype=np.int64)
+    parent = np.arange(n).astype(order.dtype)
+    births = np.empty(n, dtype=order.dtype)
+    deaths = np.empty(n, dtype=order.dtype)
     n_pairs = 0
     for r in range(n):
         v = order[r]
@@ -60,7 +62,7 @@ def _union_find_h0(values, order, indptr, indices):
                 n_pairs += 1
             parent[younger] = older
             root_v = older
-    roots = np.empty(n, dtype=np.int64)
+    roots = np.empty(n, dtype=order.dtype)
     n_roots = 0
     for r in range(n):
         v = order[r]
@@ -71,16 +73,21 @@ def _union_find_h0(values, order, indptr, indices):
 
 
 def edge_adjacency(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:
-    """CSR vertex adjacency of the mesh edges, built once per mesh."""
+    """CSR vertex adjacency of the mesh edges, built once per mesh.
+
+    Its ``indptr`` and ``indices`` share one integer type (scipy's choice: int32 unless
+    the mesh is huge), which the union-find uses for all its arrays.
+    """
     adjacency = mesh_edges(faces, n_vertices)
-    adjacency.indices = adjacency.indices.astype(np.int64, copy=False)
-    adjacency.indptr = adjacency.indptr.astype(np.int64, copy=False)
+    index_type = np.promote_types(adjacency.indices.dtype, adjacency.indptr.dtype)
+    adjacency.indices = adjacency.indices.astype(index_type, copy=False)
+    adjacency.indptr = adjacency.indptr.astype(index_type, copy=False)
     return adjacency
 
 
 def sublevel_h0(adjacency: sp.csr_matrix, values: np.ndarray):
     """Finite H0 pairs (n, 2) and essential births (c,) of the sublevel filtration."""
-    order = np.argsort(values, kind="stable")
+    order = np.argsort(values, kind="stable").astype(adjacency.indices.dtype, copy=False)
     births, deaths, roots = _union_find_h0(values, order, adjacency.indptr, adjacency.indices)
     pairs = np.column_stack([values[births], values[deaths]])
     pairs = pairs[pairs[:, 1] > pairs[:, 0]]
