@@ -62,7 +62,7 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
     """Persistence diagrams of the lower-star filtrations of vertex functions.
 
     The second stage of the mesh-learning pipeline: each sample, a :class:`ScalarField`
-    or a ``(mesh, values)`` pair, becomes its H0 persistence diagram(s), computed exactly
+    or a ``(mesh, values)`` pair, becomes its persistence diagram(s), computed exactly
     in float64 by union-find over the vertices in value order (elder rule, ties broken by
     vertex index), the edge adjacency built once per mesh and shared by its functions.
 
@@ -78,7 +78,7 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
           ``R(b, d) = (-d, -b)``. Replacing ``f`` by ``-f`` gives exactly the same
           diagrams: the output does not depend on the eigenvector's sign.
         - ``"sublevel"``: one diagram, the sublevel H0 of ``f`` with its essential
-          classes treated by ``essential``: the paper's setting.
+          classes treated by ``essential``: the paper's setting [1]_.
         - ``"superlevel"``: the same for ``-f`` (superlevel sets of ``f``, reported
           as the sublevel pairs of ``-f``).
         - ``"extended"``: four diagrams, the finite sublevel pairs of ``f``
