@@ -227,14 +227,20 @@ def closed_surface_edges(faces: np.ndarray, n_vertices: int):
         return None
     face_of = order // 3
     edges = half[order[0::2]]
-    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (n_vertices,) * 2)
+    edge_faces = np.column_stack([face_of[0::2], face_of[1::2]])
+    # The first Betti number: edges left out of both the primal and the dual spanning
+    # forests. Zero (spheres) means no essential H1 to compute.
     used = np.zeros(n_vertices, dtype=bool)
     used[edges.ravel()] = True
-    n_components = connected_components(graph, directed=False)[0] - (~used).sum()
-    euler = used.sum() - len(edges) + len(faces)
-    # first Betti number (2g on orientable components): 0 means no essential H1 to compute
-    betti_1 = 2 * n_components - euler
-    return edges, np.column_stack([face_of[0::2], face_of[1::2]]), int(betti_1)
+    primal = _n_components(edges, n_vertices) - (~used).sum()
+    dual = _n_components(edge_faces, len(faces))
+    betti_1 = len(edges) - (used.sum() - primal) - (len(faces) - dual)
+    return edges, edge_faces, int(betti_1)
+
+
+def _n_components(ends: np.ndarray, n_nodes: int) -> int:
+    graph = sp.coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])), (n_nodes, n_nodes))
+    return connected_components(graph, directed=False)[0]
 
 
 @numba.njit(cache=True)

@@ -226,6 +226,20 @@ def test_essential_h1_matches_gudhi_on_tori(seed, levels):
     np.testing.assert_allclose(sorted_rows(ext1), sorted_rows(expected), rtol=0, atol=1e-12)
 
 
+def test_essential_h1_of_a_torus_and_a_sphere_pinched_at_a_vertex_matches_gudhi():
+    a, fa = torus()
+    b, fb = sphere(1)
+    fb = fb + len(a) - 1  # the sphere's vertex 0 becomes the torus's last vertex
+    vertices = np.vstack([a, b[1:] + 3.0])
+    faces = np.vstack([fa, fb])
+    values = vertices[:, 0] + 0.2 * np.sin(4 * vertices[:, 1])
+    reference, _, _ = gudhi_extended(faces, values)
+    ext1 = diagrams_of(vertices, faces, values)[3]
+    assert closed_surface_edges(faces, len(vertices))[2] == 2
+    expected = np.asarray(reference[3], dtype=float).reshape(-1, 2)
+    np.testing.assert_allclose(sorted_rows(ext1), sorted_rows(expected), rtol=0, atol=1e-12)
+
+
 def test_essential_h1_is_empty_with_a_boundary():
     vertices, faces = torus()
     values = vertices[:, 0] + 0.3 * vertices[:, 2]
