@@ -163,6 +163,17 @@ def test_extended_matches_gudhi_extended_persistence(mesh):
         np.testing.assert_allclose(sorted_rows(mine), sorted_rows(expected), rtol=0, atol=1e-12)
 
 
+def test_extended_matches_gudhi_on_a_real_closed_mesh(sumner_dir):
+    mesh = trimesh.load(sumner_dir / "lion" / "lion-01.obj", process=False)
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    values = vertices[:, 1] + 0.01 * np.sin(40 * vertices[:, 0])
+    reference, _, _ = gudhi_extended(faces, values)
+    for mine, expected in zip(diagrams_of(vertices, faces, values), reference, strict=True):
+        expected = np.asarray(expected, dtype=float).reshape(-1, 2)
+        expected = expected[expected[:, 1] > expected[:, 0]]
+        np.testing.assert_allclose(sorted_rows(mine), sorted_rows(expected), rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("mesh, genus", [(sphere(2), 0), (torus(), 1)], ids=["sphere", "torus"])
 def test_h1_of_a_closed_surface_is_determined_by_the_returned_diagrams(mesh, genus):
     vertices, faces = mesh
