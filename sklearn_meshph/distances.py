@@ -12,7 +12,8 @@ __all__ = ["bottleneck_distance", "wasserstein_distance"]
 
 @numba.njit(cache=True)
 def _max_matching(adj_ptr, adj, n_left, n_right):
-    """Hopcroft-Karp maximum matching size of a bipartite graph in CSR form."""
+    """Hopcroft-Karp maximum matching of a bipartite graph in CSR form: its size and the
+    partner of each left and right vertex (-1: unmatched)."""
     match_left = np.full(n_left, -1, np.int64)
     match_right = np.full(n_right, -1, np.int64)
     dist = np.empty(n_left, np.int64)
@@ -46,7 +47,7 @@ def _max_matching(adj_ptr, adj, n_left, n_right):
                     queue[tail] = w
                     tail += 1
         if found == inf:
-            return size
+            return size, match_left, match_right
         for u in range(n_left):
             edge_pos[u] = adj_ptr[u]
         for root in range(n_left):
@@ -91,113 +92,237 @@ def _max_matching(adj_ptr, adj, n_left, n_right):
 
 
 @numba.njit(cache=True)
-def _covers(a, b, must_a, t):
-    """Whether the points of ``a`` flagged ``must_a`` can all be matched into ``b``
-    with L-infinity cost at most ``t``."""
-    n_left = 0
-    for i in range(len(a)):
-        if must_a[i]:
-            n_left += 1
-    if n_left == 0:
-        return True
-    ptr = np.zeros(n_left + 1, np.int64)
-    adj = np.empty(n_left * max(len(b), 1), np.int64)
-    row = 0
+def _band(births, centre, reach):
+    """Positions in sorted ``births`` within ``reach`` of ``centre`` (a superset: the
+    bounds are widened by a few ulps, callers test the exact distance)."""
+    slack = 1e-12 * (abs(centre) + reach) + 1e-300
+    lo = np.searchsorted(births, centre - reach - slack, side="left")
+    hi = np.searchsorted(births, centre + reach + slack, side="right")
+    return lo, hi
+
+
+@numba.njit(cache=True)
+def _threshold_graph(a, b, by_birth, births, rows, t):
+    """CSR graph from ``a[rows]`` to the points of ``b`` within L-infinity ``t``.
+
+    ``by_birth`` sorts ``b`` by birth and ``births`` are those births: each row only
+    looks at the band of births within ``t`` of its own (geometric pruning).
+    """
+    ptr = np.zeros(len(rows) + 1, np.int64)
+    capacity = 4 * len(rows) + 16
+    adj = np.empty(capacity, np.int64)
     k = 0
-    for i in range(len(a)):
-        if not must_a[i]:
-            continue
-        for j in range(len(b)):
-            d = max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]))
-            if d <= t:
+    for r in range(len(rows)):
+        i = rows[r]
+        lo, hi = _band(births, a[i, 0], t)
+        if k + hi - lo > capacity:
+            capacity = max(2 * capacity, k + hi - lo)
+            grown = np.empty(capacity, np.int64)
+            grown[:k] = adj[:k]
+            adj = grown
+        for s in range(lo, hi):
+            j = by_birth[s]
+            if max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1])) <= t:
                 adj[k] = j
                 k += 1
-        row += 1
-        ptr[row] = k
-    return _max_matching(ptr, adj, n_left, len(b)) == n_left
+        ptr[r + 1] = k
+    return ptr, adj[:k]
+
+
+@numba.njit(cache=True)
+def _covers(a, b, by_birth, births, must_a, t):
+    """Whether the points of ``a`` flagged ``must_a`` can all be matched into ``b``
+    with L-infinity cost at most ``t``."""
+    rows = np.flatnonzero(must_a)
+    if len(rows) == 0:
+        return True
+    if len(rows) > len(b):
+        return False
+    ptr, adj = _threshold_graph(a, b, by_birth, births, rows, t)
+    return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
+
+
+@numba.njit(cache=True)
+def _feasible(a, b, sorted_a, sorted_b, t):
+    """Whether some matching moves no point by more than ``t`` (L-infinity).
+
+    Mendelsohn-Dulmage: a matching covering the points of ``a`` that cannot go to the
+    diagonal and one covering those of ``b`` imply one covering both.
+    """
+    must_a = (a[:, 1] - a[:, 0]) / 2.0 > t
+    must_b = (b[:, 1] - b[:, 0]) / 2.0 > t
+    return _covers(a, b, sorted_b[0], sorted_b[1], must_a, t) and _covers(
+        b, a, sorted_a[0], sorted_a[1], must_b, t
+    )
+
+
+@numba.njit(cache=True)
+def _pair_values(a, b, by_birth, births, lo, hi, stride, out):
+    """Count the pairwise distances d with ``lo < d < hi``; store every ``stride``-th in
+    ``out`` (enumeration order) when ``stride > 0``."""
+    count = 0
+    stored = 0
+    for i in range(len(a)):
+        first, last = _band(births, a[i, 0], hi)
+        for s in range(first, last):
+            j = by_birth[s]
+            d = max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]))
+            if lo < d < hi:
+                if stride > 0 and count % stride == 0 and stored < len(out):
+                    out[stored] = d
+                    stored += 1
+                count += 1
+    return count
+
+
+@numba.njit(cache=True)
+def _search(a, b, sorted_a, sorted_b, values, lo, hi):
+    """Narrow the bracket (lo infeasible, hi feasible) to neighbours among ``values``."""
+    values = np.unique(values)
+    left, right = 0, len(values)
+    while left < right:
+        mid = (left + right) // 2
+        if not (lo < values[mid] < hi):
+            if values[mid] <= lo:
+                left = mid + 1
+            else:
+                right = mid
+            continue
+        if _feasible(a, b, sorted_a, sorted_b, values[mid]):
+            hi = values[mid]
+            right = mid
+        else:
+            lo = values[mid]
+            left = mid + 1
+    return lo, hi
+
+
+_SAMPLE = 256
+_COLLECT = 1 << 15
 
 
 @numba.njit(cache=True)
 def _bottleneck_finite(a, b):
+    """Exact bottleneck distance of two finite diagrams.
+
+    The distance is one of the candidate values: 0, a half-persistence (point to the
+    diagonal) or a pairwise L-infinity distance. Binary search over the n + m + 1
+    diagonal candidates brackets it; the pairwise candidates inside the bracket are
+    then narrowed by deterministic strided samples until few enough remain to sort,
+    so memory stays O(n + m + 32k) instead of the n * m of a full candidate list.
+    Every test of a threshold is a Hopcroft-Karp matching on the pairs within it, found
+    through a band of births (geometric pruning).
+    """
     n, m = len(a), len(b)
-    half_a = (a[:, 1] - a[:, 0]) / 2.0
-    half_b = (b[:, 1] - b[:, 0]) / 2.0
-    candidates = np.empty(n * m + n + m + 1, np.float64)
-    k = 0
-    for i in range(n):
-        for j in range(m):
-            candidates[k] = max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]))
-            k += 1
-    for i in range(n):
-        candidates[k] = half_a[i]
-        k += 1
-    for j in range(m):
-        candidates[k] = half_b[j]
-        k += 1
-    candidates[k] = 0.0
-    values = np.unique(candidates)
-    lo, hi = 0, len(values) - 1
-    while lo < hi:
-        mid = (lo + hi) // 2
-        t = values[mid]
-        # Mendelsohn-Dulmage: a matching covering the points that cannot go to the
-        # diagonal on each side separately implies one covering both.
-        if _covers(a, b, half_a > t, t) and _covers(b, a, half_b > t, t):
-            hi = mid
-        else:
-            lo = mid + 1
-    return values[lo]
+    order_a = np.argsort(a[:, 0], kind="mergesort")
+    order_b = np.argsort(b[:, 0], kind="mergesort")
+    sorted_a = (order_a, a[order_a, 0].copy())
+    sorted_b = (order_b, b[order_b, 0].copy())
+    diagonal = np.empty(n + m + 1)
+    diagonal[:n] = (a[:, 1] - a[:, 0]) / 2.0
+    diagonal[n : n + m] = (b[:, 1] - b[:, 0]) / 2.0
+    diagonal[n + m] = 0.0
+    # Sending everything to the diagonal is feasible at the largest half-persistence.
+    lo, hi = _search(a, b, sorted_a, sorted_b, diagonal, -1.0, diagonal.max())
+    sample = np.empty(_COLLECT)
+    while True:
+        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, sample)
+        if count == 0:
+            return hi
+        if count <= _COLLECT:
+            _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, sample)
+            return _search(a, b, sorted_a, sorted_b, sample[:count], lo, hi)[1]
+        stride = count // _SAMPLE
+        _pair_values(a, b, order_b, sorted_b[1], lo, hi, stride, sample[:_SAMPLE])
+        lo, hi = _search(a, b, sorted_a, sorted_b, sample[:_SAMPLE], lo, hi)
 
 
 @numba.njit(cache=True)
-def assignment_cost(cost):
-    """Minimum total cost of a perfect matching in a square cost matrix.
+def _bottleneck_partners(a, b, t):
+    """A matching of two finite diagrams that moves no point by more than ``t``.
 
-    Shortest augmenting paths with potentials (the Hungarian method, O(n^3)): exact.
+    A maximum matching of the points of ``a`` that cannot go to the diagonal, then,
+    for each such point of ``b`` left over, an alternating path that ends at a free
+    point of ``a`` (augment) or at a matched point of ``b`` allowed on the diagonal
+    (which gives up its partner). Neither step unmatches a point that needs a partner,
+    and Mendelsohn-Dulmage guarantees the path exists when ``t`` is feasible.
+    Returns the partner in ``b`` of each point of ``a`` (-1: the diagonal).
     """
-    n = cost.shape[0]
-    u = np.zeros(n + 1)
-    v = np.zeros(n + 1)
-    match = np.zeros(n + 1, np.int64)  # row (1-based) matched to each column, 0: free
-    way = np.zeros(n + 1, np.int64)
-    slack = np.empty(n + 1)
-    used = np.empty(n + 1, np.bool_)
-    for i in range(1, n + 1):
-        match[0] = i
-        j0 = 0
-        slack[:] = np.inf
-        used[:] = False
+    n, m = len(a), len(b)
+    must_a = (a[:, 1] - a[:, 0]) / 2.0 > t
+    must_b = (b[:, 1] - b[:, 0]) / 2.0 > t
+    order_b = np.argsort(b[:, 0], kind="mergesort")
+    births_b = b[order_b, 0].copy()
+    every = np.arange(n)
+    ptr, adj = _threshold_graph(a, b, order_b, births_b, every, t)
+    # Hopcroft-Karp on the rows that must be matched.
+    rows = np.flatnonzero(must_a)
+    sub_ptr = np.zeros(len(rows) + 1, np.int64)
+    for r in range(len(rows)):
+        sub_ptr[r + 1] = sub_ptr[r] + ptr[rows[r] + 1] - ptr[rows[r]]
+    sub_adj = np.empty(sub_ptr[-1], np.int64)
+    for r in range(len(rows)):
+        sub_adj[sub_ptr[r] : sub_ptr[r + 1]] = adj[ptr[rows[r]] : ptr[rows[r] + 1]]
+    _, sub_left, _ = _max_matching(sub_ptr, sub_adj, len(rows), m)
+    match_a = np.full(n, -1, np.int64)
+    match_b = np.full(m, -1, np.int64)
+    for r in range(len(rows)):
+        if sub_left[r] >= 0:
+            match_a[rows[r]] = sub_left[r]
+            match_b[sub_left[r]] = rows[r]
+    # Transpose: the points of a near each point of b.
+    t_ptr = np.zeros(m + 1, np.int64)
+    for e in range(len(adj)):
+        t_ptr[adj[e] + 1] += 1
+    for j in range(m):
+        t_ptr[j + 1] += t_ptr[j]
+    t_adj = np.empty(len(adj), np.int64)
+    fill = t_ptr[:-1].copy()
+    for i in range(n):
+        for e in range(ptr[i], ptr[i + 1]):
+            t_adj[fill[adj[e]]] = i
+            fill[adj[e]] += 1
+    seen = np.zeros(n, np.bool_)
+    via = np.empty(n, np.int64)
+    queue = np.empty(m, np.int64)
+    for start in range(m):
+        if not must_b[start] or match_b[start] >= 0:
+            continue
+        seen[:] = False
+        head, tail = 0, 1
+        queue[0] = start
+        end = -1
+        while head < tail and end < 0:
+            j = queue[head]
+            head += 1
+            for e in range(t_ptr[j], t_ptr[j + 1]):
+                i = t_adj[e]
+                if seen[i]:
+                    continue
+                seen[i] = True
+                via[i] = j
+                mate = match_a[i]
+                if mate < 0:
+                    end = i
+                    break
+                if not must_b[mate]:
+                    match_b[mate] = -1
+                    end = i
+                    break
+                queue[tail] = mate
+                tail += 1
+        if end < 0:
+            raise RuntimeError("no matching at the bottleneck threshold")
+        i = end
         while True:
-            used[j0] = True
-            i0 = match[j0]
-            delta = np.inf
-            j1 = 0
-            for j in range(1, n + 1):
-                if not used[j]:
-                    reduced = cost[i0 - 1, j - 1] - u[i0] - v[j]
-                    if reduced < slack[j]:
-                        slack[j] = reduced
-                        way[j] = j0
-                    if slack[j] < delta:
-                        delta = slack[j]
-                        j1 = j
-            for j in range(n + 1):
-                if used[j]:
-                    u[match[j]] += delta
-                    v[j] -= delta
-                else:
-                    slack[j] -= delta
-            j0 = j1
-            if match[j0] == 0:
+            j = via[i]
+            previous = match_b[j]
+            match_a[i] = j
+            match_b[j] = i
+            if j == start:
                 break
-        while j0 != 0:
-            j1 = way[j0]
-            match[j0] = match[j1]
-            j0 = j1
-    total = 0.0
-    for j in range(1, n + 1):
-        total += cost[match[j] - 1, j - 1]
-    return total
+            i = previous
+    return match_a
 
 
 @numba.njit(cache=True)
@@ -212,11 +337,299 @@ def _precedes(a, b):
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def _power(g, order):
+    if order == 1.0:
+        return g
+    if order == 2.0:
+        return g * g
+    return g**order
+
+
+@numba.njit(cache=True, inline="always")
 def _ground(dx, dy, internal_p):
-    if np.isinf(internal_p):
+    if internal_p == np.inf:
         return max(dx, dy)
+    if internal_p == 2.0:
+        return np.sqrt(dx * dx + dy * dy)
+    if internal_p == 1.0:
+        return dx + dy
     return (dx**internal_p + dy**internal_p) ** (1.0 / internal_p)
+
+
+@numba.njit(cache=True)
+def _to_diagonal(d, order, internal_p):
+    """cost^order of moving each point of ``d`` to its projection on the diagonal."""
+    scale = 1.0 if internal_p == np.inf else 2.0 ** (1.0 / internal_p)
+    out = np.empty(len(d))
+    for i in range(len(d)):
+        out[i] = _power((d[i, 1] - d[i, 0]) / 2.0 * scale, order)
+    return out
+
+
+_DIAGONAL = -2  # a row assigned to the diagonal
+
+
+@numba.njit(cache=True)
+def _heap_push(keys, items, size, key, item):
+    pos = size
+    while pos > 0:
+        parent = (pos - 1) >> 1
+        if keys[parent] <= key:
+            break
+        keys[pos] = keys[parent]
+        items[pos] = items[parent]
+        pos = parent
+    keys[pos] = key
+    items[pos] = item
+    return size + 1
+
+
+@numba.njit(cache=True)
+def _heap_pop(keys, items, size):
+    """Remove the root; return the new size (the root was read by the caller)."""
+    size -= 1
+    key, item = keys[size], items[size]
+    pos = 0
+    while True:
+        child = 2 * pos + 1
+        if child >= size:
+            break
+        if child + 1 < size and keys[child + 1] < keys[child]:
+            child += 1
+        if keys[child] >= key:
+            break
+        keys[pos] = keys[child]
+        items[pos] = items[child]
+        pos = child
+    if size > 0:
+        keys[pos] = key
+        items[pos] = item
+    return size
+
+
+@numba.njit(cache=True)
+def _candidate_edges(a, b, da, db, order, internal_p):
+    """Pairs (i, j) worth matching: cost below sending both to the diagonal.
+
+    Any matching that uses another pair costs no less after sending both of its points
+    to the diagonal instead, so an optimal matching among these pairs is optimal. Points
+    of ``b`` are scanned through a band of births around each point of ``a``.
+    Returns CSR arrays (row pointers, columns, reduced costs ``c - db``) with the private
+    diagonal column ``m + i`` of each row last.
+    """
+    n, m = len(a), len(b)
+    by_birth = np.argsort(b[:, 0], kind="mergesort")
+    births = b[by_birth, 0]
+    widest = 0.0
+    for j in range(m):
+        widest = max(widest, b[j, 1] - b[j, 0])
+    scale = 1.0 if internal_p == np.inf else 2.0 ** (1.0 / internal_p)
+    ptr = np.zeros(n + 1, np.int64)
+    capacity = 4 * (n + m) + 16
+    cols = np.empty(capacity, np.int64)
+    costs = np.empty(capacity)
+    k = 0
+    for i in range(n):
+        # ground >= |birth difference| and each diagonal cost <= (scale * half)^order.
+        reach = scale * ((a[i, 1] - a[i, 0]) / 2.0 + widest / 2.0)
+        lo = np.searchsorted(births, a[i, 0] - reach, side="left")
+        hi = np.searchsorted(births, a[i, 0] + reach, side="right")
+        if k + (hi - lo) + 1 > capacity:
+            capacity = max(2 * capacity, k + (hi - lo) + 1)
+            grown = np.empty(capacity, np.int64)
+            grown[:k] = cols[:k]
+            cols = grown
+            grown_costs = np.empty(capacity)
+            grown_costs[:k] = costs[:k]
+            costs = grown_costs
+        for s in range(lo, hi):
+            j = by_birth[s]
+            c = _power(_ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p), order)
+            if c < da[i] + db[j]:
+                cols[k] = j
+                costs[k] = c - db[j]
+                k += 1
+        cols[k] = m + i
+        costs[k] = da[i]
+        k += 1
+        ptr[i + 1] = k
+    return ptr, cols[:k], costs[:k]
+
+
+@numba.njit(cache=True)
+def _optimal_transport(a, b, order, internal_p):
+    """Optimal matching of two finite diagrams for the cost ``sum ground^order``.
+
+    Every point goes to a point of the other diagram or to the diagonal; the diagonal to
+    itself is free. Writing the cost of a matching as ``sum_j db[j]`` plus, for each
+    point i of ``a``, either ``c[i, j] - db[j]`` (matched to point j of ``b``) or
+    ``da[i]`` (sent to the diagonal) turns the (n + m)-square assignment problem of the
+    usual construction into an n x (m + n) one in which each row has a private diagonal
+    column, and pairs that cost more than sending both points to the diagonal are
+    dropped (``_candidate_edges``). It is solved exactly: Jonker-Volgenant row reduction
+    for a start, then one shortest augmenting path per remaining row (Dijkstra with dual
+    potentials and a binary heap). Rows go in order of increasing persistence, which
+    keeps the augmenting paths short.
+
+    Returns the optimal total cost and, for each point of ``a``, its partner in ``b``
+    or ``_DIAGONAL``.
+    """
+    rows = np.argsort(a[:, 1] - a[:, 0], kind="mergesort")
+    total, partner = _transport_rows(a[rows], b, order, internal_p)
+    out = np.empty_like(partner)
+    out[rows] = partner
+    return total, out
+
+
+@numba.njit(cache=True)
+def _transport_rows(a, b, order, internal_p):
+    n, m = len(a), len(b)
+    da = _to_diagonal(a, order, internal_p)
+    db = _to_diagonal(b, order, internal_p)
+    ptr, cols, costs = _candidate_edges(a, b, da, db, order, internal_p)
+    n_cols = m + n
+    u = np.zeros(n)
+    v = np.zeros(n_cols)
+    col4row = np.full(n, -1, np.int64)
+    row4col = np.full(n_cols, -1, np.int64)
+    dist = np.full(n_cols, np.inf)
+    done = np.zeros(n_cols, np.bool_)
+    path = np.empty(n_cols, np.int64)
+    touched = np.empty(n_cols, np.int64)
+    visited = np.empty(n, np.int64)
+    keys = np.empty(len(cols) + 1)
+    items = np.empty(len(cols) + 1, np.int64)
+    free = _row_reduction(ptr, cols, costs, u, v, col4row, row4col, n)
+    for root in free:
+        n_touched = 0
+        n_visited = 0
+        size = 0
+        i = root
+        base = 0.0
+        sink = -1
+        while True:
+            visited[n_visited] = i
+            n_visited += 1
+            ui = u[i]
+            for e in range(ptr[i], ptr[i + 1]):
+                j = cols[e]
+                if done[j]:
+                    continue
+                reduced = base + costs[e] - ui - v[j]
+                if reduced < dist[j]:
+                    if dist[j] == np.inf:
+                        touched[n_touched] = j
+                        n_touched += 1
+                    dist[j] = reduced
+                    path[j] = i
+                    size = _heap_push(keys, items, size, reduced, j)
+            j = -1
+            while size > 0:
+                top, j = keys[0], items[0]
+                size = _heap_pop(keys, items, size)
+                if not done[j] and top == dist[j]:
+                    break
+                j = -1
+            # j == -1 cannot happen: the row's private diagonal column is always free.
+            done[j] = True
+            base = dist[j]
+            if row4col[j] == -1:
+                sink = j
+                break
+            i = row4col[j]
+        min_value = base
+        u[root] += min_value
+        for k in range(1, n_visited):
+            r = visited[k]
+            u[r] += min_value - dist[col4row[r]]
+        for k in range(n_touched):
+            j = touched[k]
+            if done[j]:
+                v[j] -= min_value - dist[j]
+            dist[j] = np.inf
+            done[j] = False
+        j = sink
+        while True:
+            r = path[j]
+            row4col[j] = r
+            previous = col4row[r]
+            col4row[r] = j
+            if r == root:
+                break
+            j = previous
+    total = 0.0
+    for j in range(m):
+        if row4col[j] == -1:
+            total += db[j]
+    for i in range(n):
+        j = col4row[i]
+        if j >= m:
+            total += da[i]
+            col4row[i] = _DIAGONAL
+        else:
+            total += _power(
+                _ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p), order
+            )
+    return total, col4row
+
+
+@numba.njit(cache=True)
+def _row_reduction(ptr, cols, costs, u, v, col4row, row4col, n):
+    """Jonker-Volgenant augmenting row reduction: a cheap start for most rows.
+
+    Each free row takes its cheapest column (reduced by ``v``), lowering that column's
+    potential to the second cheapest option so the duals stay feasible, and displacing
+    the previous owner, which tries again. Returns the rows still free.
+    """
+    free = np.arange(n)
+    n_free = n
+    for _ in range(8):
+        queue = free[:n_free].copy()
+        n_queue = n_free
+        n_free = 0
+        k = 0
+        steps = 0
+        while k < n_queue:
+            i = queue[k]
+            k += 1
+            steps += 1
+            first = np.inf
+            second = np.inf
+            j1 = -1
+            j2 = -1
+            for e in range(ptr[i], ptr[i + 1]):
+                h = costs[e] - v[cols[e]]
+                if h < second:
+                    if h < first:
+                        second, j2 = first, j1
+                        first, j1 = h, cols[e]
+                    else:
+                        second, j2 = h, cols[e]
+            owner = row4col[j1]
+            if first < second:
+                v[j1] -= second - first
+                u[i] = second
+            elif owner >= 0 and j2 >= 0:
+                j1 = j2
+                owner = row4col[j1]
+                u[i] = first
+            else:
+                u[i] = first
+            if j2 < 0:
+                u[i] = first
+            if owner >= 0:
+                col4row[owner] = -1
+            col4row[i] = j1
+            row4col[j1] = i
+            if owner >= 0:
+                if first < second and steps < 4 * n:
+                    k -= 1
+                    queue[k] = owner
+                else:
+                    free[n_free] = owner
+                    n_free += 1
+    return free[:n_free].copy()
 
 
 @numba.njit(cache=True)
@@ -224,30 +637,7 @@ def _wasserstein_power(a, b, order, internal_p):
     """Optimal sum of cost^order over matchings of two finite diagrams."""
     if not _precedes(a, b):  # so that d(a, b) == d(b, a) bit for bit
         a, b = b, a
-    if len(a) + len(b) == 0:
-        return 0.0
-    return assignment_cost(_augmented_costs(a, b, order, internal_p))
-
-
-@numba.njit(cache=True)
-def _augmented_costs(a, b, order, internal_p):
-    """(n + m)-square costs: points to points, points to the diagonal, diagonal to itself."""
-    n, m = len(a), len(b)
-    diagonal = 1.0 if np.isinf(internal_p) else 2.0 ** (1.0 / internal_p)
-    cost = np.zeros((n + m, n + m))
-    for i in range(n):
-        to_diagonal = ((a[i, 1] - a[i, 0]) / 2.0 * diagonal) ** order
-        for j in range(m):
-            dx = abs(a[i, 0] - b[j, 0])
-            dy = abs(a[i, 1] - b[j, 1])
-            cost[i, j] = _ground(dx, dy, internal_p) ** order
-        for j in range(m, m + n):
-            cost[i, j] = to_diagonal
-    for j in range(m):
-        to_diagonal = ((b[j, 1] - b[j, 0]) / 2.0 * diagonal) ** order
-        for i in range(n, n + m):
-            cost[i, j] = to_diagonal
-    return cost
+    return _optimal_transport(a, b, order, internal_p)[0]
 
 
 @numba.njit(cache=True)
@@ -326,40 +716,8 @@ def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return points, offsets, births.astype(np.float64), essential_offsets.astype(np.int64)
 
 
-# Above this many points, scipy's C++ assignment solver beats the compiled Hungarian on
-# the degenerate (tied) costs of the diagonal blocks.
-_LARGE = 64
-
-
-def _large_wasserstein(left, right, rows, cols, n_parts, order, internal_p):
-    from scipy.optimize import linear_sum_assignment
-
-    out = np.empty(len(rows))
-    for k, (i, j) in enumerate(zip(rows, cols, strict=True)):
-        total = 0.0
-        for part in range(n_parts):
-            da, db = i * n_parts + part, j * n_parts + part
-            a = left[0][left[1][da] : left[1][da + 1]]
-            b = right[0][right[1][db] : right[1][db + 1]]
-            ea = left[2][left[3][da] : left[3][da + 1]]
-            eb = right[2][right[3][db] : right[3][db + 1]]
-            if len(ea) != len(eb):
-                total = np.inf
-                break
-            if not _precedes(a, b):
-                a, b = b, a
-            cost = _augmented_costs(a, b, order, internal_p)
-            r, c = linear_sum_assignment(cost)
-            total += float(cost[r, c].sum()) + float(np.sum(np.abs(ea - eb) ** order))
-        out[k] = total ** (1.0 / order)
-    return out
-
-
 def pair_distances(left, right, rows, cols, n_parts, metric, order=2.0, internal_p=np.inf):
     """Distances of the sample pairs ``(rows[k], cols[k])`` of two packed sets."""
-    largest = max(np.diff(left[1]).max(initial=0), np.diff(right[1]).max(initial=0))
-    if metric == "wasserstein" and largest > _LARGE:
-        return _large_wasserstein(left, right, rows, cols, n_parts, float(order), float(internal_p))
     return _pairs_kernel(
         left,
         right,
@@ -380,7 +738,48 @@ def _one_pair(a, b, metric, order=2.0, internal_p=np.inf) -> float:
     )
 
 
-def bottleneck_distance(a, b) -> float:
+def _split(diagram):
+    """Finite points and the essential points sorted by birth, each with their rows."""
+    finite = np.flatnonzero(np.isfinite(diagram[:, 1]))
+    essential = np.flatnonzero(~np.isfinite(diagram[:, 1]))
+    essential = essential[np.argsort(diagram[essential, 0], kind="stable")]
+    return finite, essential
+
+
+def _with_matching(a, b, metric, order=2.0, internal_p=np.inf):
+    """The distance and an optimal matching as rows (i, j); -1 stands for the diagonal."""
+    a, b = check_diagram(a, index=0), check_diagram(b, index=1)
+    distance = _one_pair(a, b, metric, order, internal_p)
+    (finite_a, essential_a), (finite_b, essential_b) = _split(a), _split(b)
+    if len(essential_a) != len(essential_b):
+        return distance, None
+    fa, fb = a[finite_a], b[finite_b]
+    swap = not _precedes(fa, fb)  # the orientation the distance was computed in
+    left, right = (fb, fa) if swap else (fa, fb)
+    if metric == "bottleneck":
+        partner = _bottleneck_partners(left, right, _bottleneck_finite(left, right))
+    else:
+        partner = _optimal_transport(left, right, float(order), float(internal_p))[1]
+        partner[partner == _DIAGONAL] = -1
+    pairs = [(i, j) for i, j in enumerate(partner)]
+    taken = np.zeros(len(right), dtype=bool)
+    taken[partner[partner >= 0]] = True
+    pairs += [(-1, j) for j in np.flatnonzero(~taken)]
+    pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    if swap:
+        pairs = pairs[:, ::-1]
+    # Back to the rows of the inputs (finite rows first, then the essential pairs).
+    index_a, index_b = np.append(finite_a, -1), np.append(finite_b, -1)
+    matched = np.vstack(
+        [
+            np.column_stack([index_a[pairs[:, 0]], index_b[pairs[:, 1]]]),
+            np.column_stack([essential_a, essential_b]),
+        ]
+    )
+    return distance, matched.astype(np.int64)
+
+
+def bottleneck_distance(a, b, matching: bool = False):
     """Exact bottleneck distance between two persistence diagrams (L-infinity ground).
 
     Parameters
@@ -388,14 +787,21 @@ def bottleneck_distance(a, b) -> float:
     a, b : array-like of shape (n, 2) and (m, 2)
         Rows (birth, death); death may be ``inf``. Empty diagrams, repeated points and
         points on the diagonal are valid.
+    matching : bool, default=False
+        Also return a matching that attains the distance.
 
     Returns
     -------
-    float
+    distance : float
         ``inf`` when the numbers of essential (infinite) points differ; otherwise the
         smallest ``t`` such that a matching of the points to each other or to the
         diagonal moves no point by more than ``t`` in the L-infinity norm (essential
         points matched among themselves by sorted birth).
+    matching : ndarray of shape (k, 2), dtype int64
+        Only with ``matching=True``: rows ``(i, j)`` pairing row ``i`` of ``a`` with row
+        ``j`` of ``b``; ``j = -1`` (``i = -1``) sends the point of ``a`` (``b``) to the
+        diagonal. Every row of both diagrams appears once. ``None`` when the distance is
+        infinite.
 
     See Also
     --------
@@ -408,11 +814,18 @@ def bottleneck_distance(a, b) -> float:
     0.25
     >>> bottleneck_distance([], [[0.5, 1.0]])
     0.25
+    >>> bottleneck_distance([[0.0, 1.0]], [[0.0, 1.25], [0.5, 0.75]], matching=True)
+    (0.25, array([[ 0,  0],
+           [-1,  1]]))
     """
+    if matching:
+        return _with_matching(a, b, "bottleneck")
     return _one_pair(a, b, "bottleneck")
 
 
-def wasserstein_distance(a, b, order: float = 2.0, internal_p: float = np.inf) -> float:
+def wasserstein_distance(
+    a, b, order: float = 2.0, internal_p: float = np.inf, matching: bool = False
+):
     """Exact q-Wasserstein distance between two persistence diagrams.
 
     Parameters
@@ -423,12 +836,17 @@ def wasserstein_distance(a, b, order: float = 2.0, internal_p: float = np.inf) -
     internal_p : float, default=inf
         Ground metric between points: the L-p norm (``inf``: L-infinity, as in the
         paper). The distance of a point to the diagonal is that to its projection.
+    matching : bool, default=False
+        Also return an optimal matching.
 
     Returns
     -------
-    float
+    distance : float
         ``(min over matchings of sum cost^q)^(1/q)``, solved exactly as an assignment
         problem (no approximation); ``inf`` when the numbers of essential points differ.
+    matching : ndarray of shape (k, 2), dtype int64
+        Only with ``matching=True``: as in :func:`bottleneck_distance` (``-1``: the
+        diagonal), the layout of gudhi's ``wasserstein_distance(..., matching=True)``.
 
     See Also
     --------
@@ -439,9 +857,14 @@ def wasserstein_distance(a, b, order: float = 2.0, internal_p: float = np.inf) -
     >>> from sklearn_meshph import wasserstein_distance
     >>> wasserstein_distance([[0.0, 1.0]], [[0.0, 1.25], [0.5, 0.75]], order=1.0)
     0.375
+    >>> wasserstein_distance([[0.0, 1.0]], [[0.0, 1.25], [0.5, 0.75]], matching=True)[1]
+    array([[ 0,  0],
+           [-1,  1]])
     """
     if not order >= 1:
         raise ValueError(f"order must be at least 1, got {order}")
     if not internal_p >= 1:
         raise ValueError(f"internal_p must be at least 1, got {internal_p}")
+    if matching:
+        return _with_matching(a, b, "wasserstein", order, internal_p)
     return _one_pair(a, b, "wasserstein", order, internal_p)

@@ -79,10 +79,15 @@ def test_gudhi_exact_bottleneck_is_wrong_on_this_pair():
 
 @settings(max_examples=200, deadline=None)
 @given(a=diagrams(), b=diagrams(), order=st.sampled_from([1.0, 2.0, 3.5]))
-def test_wasserstein_equals_pot(a, b, order):
+def test_wasserstein_equals_assignment_and_pot(a, b, order):
     ours = wasserstein_distance(a, b, order=order)
+    cost = augmented_costs(a, b, power=order)
+    rows, cols = linear_sum_assignment(cost)
+    assert ours == pytest.approx(cost[rows, cols].sum() ** (1 / order), rel=1e-9, abs=1e-12)
+    # POT's network simplex stops at an absolute tolerance on the total cost: compare
+    # there (tiny diagrams with order 3.5 have costs near 1e-18).
     ref = gudhi_wasserstein.wasserstein_distance(a, b, order=order, internal_p=np.inf)
-    assert ours == pytest.approx(ref, rel=1e-9, abs=1e-12)
+    assert ours**order == pytest.approx(ref**order, rel=1e-9, abs=1e-14)
 
 
 @settings(max_examples=50, deadline=None)
@@ -150,3 +155,85 @@ def test_large_diagrams_agree_with_hera_and_pot():
     assert bottleneck_distance(a, b) == pytest.approx(hera.bottleneck_distance(a, b, delta=0))
     ref = gudhi_wasserstein.wasserstein_distance(a, b, order=2.0, internal_p=np.inf)
     assert wasserstein_distance(a, b) == pytest.approx(ref, rel=1e-9)
+
+
+def matching_cost(a, b, matched, order):
+    """Per-pair costs of a matching given as rows (i, j), -1 for the diagonal."""
+    costs = []
+    for i, j in matched:
+        if i >= 0 and j >= 0:
+            if np.isinf(a[i, 1]):
+                assert np.isinf(b[j, 1]), "an essential point matched to a finite one"
+                costs.append(abs(a[i, 0] - b[j, 0]))
+            else:
+                costs.append(np.abs(a[i] - b[j]).max())
+        else:
+            point = a[i] if i >= 0 else b[j]
+            assert np.isfinite(point[1]), "an essential point sent to the diagonal"
+            costs.append((point[1] - point[0]) / 2)
+    return np.array(costs)
+
+
+def with_essential(draw_diagram, births):
+    return np.vstack([draw_diagram, np.column_stack([births, np.full(len(births), np.inf)])])
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    a=diagrams(),
+    b=diagrams(),
+    essential=st.lists(st.integers(0, 3), max_size=3),
+    order=st.sampled_from([1.0, 2.0]),
+)
+def test_returned_matchings_attain_the_distance(a, b, essential, order):
+    a = with_essential(a, np.array(essential, dtype=float))
+    b = with_essential(b, np.array(essential[::-1], dtype=float) / 2)
+    for name, (distance, matched) in {
+        "bottleneck": bottleneck_distance(a, b, matching=True),
+        "wasserstein": wasserstein_distance(a, b, order=order, matching=True),
+    }.items():
+        assert matched.dtype == np.int64 and matched.shape[1] == 2
+        # Every row of both diagrams appears exactly once.
+        assert sorted(matched[matched[:, 0] >= 0, 0]) == list(range(len(a))), name
+        assert sorted(matched[matched[:, 1] >= 0, 1]) == list(range(len(b))), name
+        assert not ((matched[:, 0] < 0) & (matched[:, 1] < 0)).any()
+        costs = matching_cost(a, b, matched, order)
+        if name == "bottleneck":
+            assert costs.max(initial=0.0) == distance
+        else:
+            assert (costs**order).sum() ** (1 / order) == pytest.approx(distance, rel=1e-12)
+
+
+def test_matching_is_none_when_essential_counts_differ():
+    a, b = [[0.0, np.inf]], [[0.0, 1.0]]
+    assert bottleneck_distance(a, b, matching=True) == (np.inf, None)
+    assert wasserstein_distance(a, b, matching=True) == (np.inf, None)
+
+
+def test_bottleneck_narrows_millions_of_candidates_exactly():
+    """Large enough that the pairwise candidates are narrowed by strided samples."""
+    from sklearn_meshph.distances import _COLLECT, _pair_values
+
+    rng = np.random.default_rng(3)
+    a = rng.random((1200, 2)) @ [[1, 1], [0, 0.5]]
+    b = rng.random((1100, 2)) @ [[1, 1], [0, 0.5]]
+    order = np.argsort(b[:, 0], kind="mergesort")
+    bracket = _pair_values(a, b, order, b[order, 0], -1.0, 0.25, 0, np.empty(0))
+    assert bracket > 10 * _COLLECT
+    ours = bottleneck_distance(a, b)
+    assert ours == pytest.approx(hera.bottleneck_distance(a, b, delta=0), abs=1e-12)
+    assert bottleneck_distance(b, a) == ours
+    _, matched = bottleneck_distance(a, b, matching=True)
+    assert matching_cost(a, b, matched, 1.0).max() == ours
+
+
+def test_wasserstein_on_a_tied_grid_equals_pot():
+    """Hundreds of points on a coarse grid: ties everywhere in the shortest paths."""
+    rng = np.random.default_rng(4)
+    births = rng.integers(0, 10, (2, 300)) / 10
+    lengths = rng.integers(0, 6, (2, 300)) / 10
+    a = np.column_stack([births[0], births[0] + lengths[0]])
+    b = np.column_stack([births[1], births[1] + lengths[1]])[:260]
+    for order in (1.0, 2.0):
+        ref = gudhi_wasserstein.wasserstein_distance(a, b, order=order, internal_p=np.inf)
+        assert wasserstein_distance(a, b, order=order) == pytest.approx(ref, rel=1e-10)
