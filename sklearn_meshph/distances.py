@@ -14,12 +14,16 @@ __all__ = ["bottleneck_distance", "wasserstein_distance"]
 def _max_matching(adj_ptr, adj, n_left, n_right):
     """Hopcroft-Karp maximum matching of a bipartite graph in CSR form: its size and the
     partner of each left and right vertex (-1: unmatched)."""
-    match_left = np.full(n_left, -1, np.int64)
-    match_right = np.full(n_right, -1, np.int64)
-    dist = np.empty(n_left, np.int64)
-    queue = np.empty(n_left, np.int64)
-    stack = np.empty(n_left + 1, np.int64)
-    edge_pos = np.empty(n_left, np.int64)
+    # One allocation for all the work arrays: this runs millions of times on tiny graphs.
+    work = np.empty(5 * n_left + n_right + 1, np.int64)
+    match_left = work[:n_left]
+    match_right = work[n_left : n_left + n_right]
+    dist = work[n_left + n_right : 2 * n_left + n_right]
+    queue = work[2 * n_left + n_right : 3 * n_left + n_right]
+    edge_pos = work[3 * n_left + n_right : 4 * n_left + n_right]
+    stack = work[4 * n_left + n_right :]
+    match_left[:] = -1
+    match_right[:] = -1
     size = 0
     inf = n_left + n_right + 1
     while True:
@@ -130,16 +134,25 @@ def _threshold_graph(a, b, by_birth, births, rows, t):
 
 
 @numba.njit(cache=True)
-def _covers(a, b, by_birth, births, must_a, t):
-    """Whether the points of ``a`` flagged ``must_a`` can all be matched into ``b``
-    with L-infinity cost at most ``t``."""
-    rows = np.flatnonzero(must_a)
-    if len(rows) == 0:
+def _covers(a, b, by_birth, births, t):
+    """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
+    matched into ``b`` with L-infinity cost at most ``t``."""
+    n_rows = 0
+    for i in range(len(a)):
+        if (a[i, 1] - a[i, 0]) / 2.0 > t:
+            n_rows += 1
+    if n_rows == 0:
         return True
-    if len(rows) > len(b):
+    if n_rows > len(b):
         return False
+    rows = np.empty(n_rows, np.int64)
+    n_rows = 0
+    for i in range(len(a)):
+        if (a[i, 1] - a[i, 0]) / 2.0 > t:
+            rows[n_rows] = i
+            n_rows += 1
     ptr, adj = _threshold_graph(a, b, by_birth, births, rows, t)
-    return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
+    return _max_matching(ptr, adj, n_rows, len(b))[0] == n_rows
 
 
 @numba.njit(cache=True)
@@ -149,11 +162,7 @@ def _feasible(a, b, sorted_a, sorted_b, t):
     Mendelsohn-Dulmage: a matching covering the points of ``a`` that cannot go to the
     diagonal and one covering those of ``b`` imply one covering both.
     """
-    must_a = (a[:, 1] - a[:, 0]) / 2.0 > t
-    must_b = (b[:, 1] - b[:, 0]) / 2.0 > t
-    return _covers(a, b, sorted_b[0], sorted_b[1], must_a, t) and _covers(
-        b, a, sorted_a[0], sorted_a[1], must_b, t
-    )
+    return _covers(a, b, sorted_b[0], sorted_b[1], t) and _covers(b, a, sorted_a[0], sorted_a[1], t)
 
 
 @numba.njit(cache=True)
@@ -176,18 +185,28 @@ def _pair_values(a, b, by_birth, births, lo, hi, stride, out):
 
 
 @numba.njit(cache=True)
-def _search(a, b, sorted_a, sorted_b, values, lo, hi):
-    """Narrow the bracket (lo infeasible, hi feasible) to neighbours among ``values``."""
+def _search(a, b, sorted_a, sorted_b, values, lo, hi, gallop):
+    """Narrow the bracket (lo infeasible, hi feasible) to neighbours among ``values``.
+
+    With ``gallop``, thresholds just above ``lo`` are tried first at exponentially
+    growing steps (the answer is usually a few candidates above the lower bound), then
+    the last gap is bisected.
+    """
     values = np.unique(values)
-    left, right = 0, len(values)
+    left = np.searchsorted(values, lo, side="right")
+    right = np.searchsorted(values, hi, side="left")  # values[left:right] are inside
+    step = 1
+    while gallop and left < right:
+        probe = min(left + step - 1, right - 1)
+        if _feasible(a, b, sorted_a, sorted_b, values[probe]):
+            hi = values[probe]
+            right = probe
+            break
+        lo = values[probe]
+        left = probe + 1
+        step *= 2
     while left < right:
         mid = (left + right) // 2
-        if not (lo < values[mid] < hi):
-            if values[mid] <= lo:
-                left = mid + 1
-            else:
-                right = mid
-            continue
         if _feasible(a, b, sorted_a, sorted_b, values[mid]):
             hi = values[mid]
             right = mid
@@ -202,39 +221,70 @@ _COLLECT = 1 << 15
 
 
 @numba.njit(cache=True)
+def _lower_bound(a, b, by_birth, births):
+    """max over the points of ``a`` of the cheapest move (to ``b`` or the diagonal):
+    no threshold below it is feasible, and it is a candidate value itself."""
+    bound = 0.0
+    for i in range(len(a)):
+        best = (a[i, 1] - a[i, 0]) / 2.0
+        first, last = _band(births, a[i, 0], best)
+        for s in range(first, last):
+            j = by_birth[s]
+            best = min(best, max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1])))
+        bound = max(bound, best)
+    return bound
+
+
+@numba.njit(cache=True)
 def _bottleneck_finite(a, b):
     """Exact bottleneck distance of two finite diagrams.
 
     The distance is one of the candidate values: 0, a half-persistence (point to the
-    diagonal) or a pairwise L-infinity distance. Binary search over the n + m + 1
-    diagonal candidates brackets it; the pairwise candidates inside the bracket are
-    then narrowed by deterministic strided samples until few enough remain to sort,
-    so memory stays O(n + m + 32k) instead of the n * m of a full candidate list.
-    Every test of a threshold is a Hopcroft-Karp matching on the pairs within it, found
-    through a band of births (geometric pruning).
+    diagonal) or a pairwise L-infinity distance, and at least the largest cheapest move
+    of a single point, which is often the answer and is tried first. Otherwise a binary
+    search over the n + m diagonal candidates brackets it, and the pairwise candidates
+    inside the bracket are narrowed by deterministic strided samples until few enough
+    remain to sort, so memory stays O(n + m + 32k) instead of the n * m of a full
+    candidate list. Every test of a threshold is a Hopcroft-Karp matching on the pairs
+    within it, found through a band of births (geometric pruning).
     """
     n, m = len(a), len(b)
     order_a = np.argsort(a[:, 0], kind="mergesort")
     order_b = np.argsort(b[:, 0], kind="mergesort")
     sorted_a = (order_a, a[order_a, 0].copy())
     sorted_b = (order_b, b[order_b, 0].copy())
-    diagonal = np.empty(n + m + 1)
+    lo = max(_lower_bound(a, b, *sorted_b), _lower_bound(b, a, *sorted_a))
+    if _feasible(a, b, sorted_a, sorted_b, lo):
+        return lo
+    diagonal = np.empty(n + m)
     diagonal[:n] = (a[:, 1] - a[:, 0]) / 2.0
-    diagonal[n : n + m] = (b[:, 1] - b[:, 0]) / 2.0
-    diagonal[n + m] = 0.0
+    diagonal[n:] = (b[:, 1] - b[:, 0]) / 2.0
     # Sending everything to the diagonal is feasible at the largest half-persistence.
-    lo, hi = _search(a, b, sorted_a, sorted_b, diagonal, -1.0, diagonal.max())
-    sample = np.empty(_COLLECT)
+    hi = diagonal.max()
+    count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
+    if count > _COLLECT:
+        lo, hi = _search(a, b, sorted_a, sorted_b, diagonal, lo, hi, False)
     while True:
-        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, sample)
-        if count == 0:
-            return hi
+        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
         if count <= _COLLECT:
-            _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, sample)
-            return _search(a, b, sorted_a, sorted_b, sample[:count], lo, hi)[1]
-        stride = count // _SAMPLE
-        _pair_values(a, b, order_b, sorted_b[1], lo, hi, stride, sample[:_SAMPLE])
-        lo, hi = _search(a, b, sorted_a, sorted_b, sample[:_SAMPLE], lo, hi)
+            values = np.empty(count + n + m)
+            _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, values)
+            values[count:] = diagonal
+            # The next few candidates above lo by linear scans, before sorting them all.
+            for _ in range(4):
+                following = hi
+                for v in values:
+                    if lo < v < following:
+                        following = v
+                if following == hi:
+                    return hi
+                if _feasible(a, b, sorted_a, sorted_b, following):
+                    return following
+                lo = following
+            return _search(a, b, sorted_a, sorted_b, values, lo, hi, True)[1]
+        sample = np.empty(_SAMPLE)
+        _pair_values(a, b, order_b, sorted_b[1], lo, hi, count // _SAMPLE, sample)
+        lo, hi = _search(a, b, sorted_a, sorted_b, sample, lo, hi, False)
 
 
 @numba.njit(cache=True)
