@@ -45,7 +45,8 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eig
     L, M = build_laplacian(clean.vertices, clean.faces, laplacian)
     if normalization == "area":
         M = M / M.diagonal().sum()
-    values, vectors = generalized_eigenpairs(L, M, min(n_eigs, len(clean.vertices)), seed=seed)
+    n_eigs = min(n_eigs, len(clean.vertices))
+    values, vectors = generalized_eigenpairs(L, M, n_eigs, seed=seed, points=clean.vertices)
     return clean, values, vectors
 
 

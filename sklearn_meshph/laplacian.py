@@ -11,8 +11,9 @@ Two discretizations:
   with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
 
 Eigenpairs come from shift-invert Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`)
-with a small negative shift and one sparse factorization of ``L - sigma M``, ordered by
-nested dissection (METIS, through pymetis) so that fill-in stays near-linear.
+with a small negative shift and one sparse Cholesky factorization of ``L - sigma M``
+(CHOLMOD, through cholespy); without cholespy, a sparse LU (SuperLU) on a geometric
+nested-dissection order, so that fill-in stays near-linear either way.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
 from ._mesh import check_mesh, clean_mesh, face_double_areas
+from ._ordering import geometric_nested_dissection
 
 __all__ = ["cotangent_laplacian", "graph_laplacian", "laplacian_eigenfunctions"]
 
@@ -125,47 +127,75 @@ def build_laplacian(vertices, faces, laplacian: str):
     raise ValueError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
 
 
-def _fill_reducing_order(A: sp.csr_matrix) -> np.ndarray | None:
-    """Nested-dissection order of the graph of ``A`` (None when METIS is unavailable)."""
+def _cholesky(A: sp.spmatrix):
+    """CHOLMOD's sparse Cholesky factor of ``A`` (None when cholespy is unavailable)."""
     try:
-        import pymetis
+        from cholespy import CholeskySolverD, MatrixType
     except ImportError:
         return None
-    graph = A.copy()
-    graph.setdiag(0)
-    graph.eliminate_zeros()
-    perm, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr, graph.indices))
-    return np.asarray(perm, dtype=np.int64)
+    A = sp.csc_matrix(A)
+    return CholeskySolverD(
+        A.shape[0],
+        A.indptr.astype(np.int32),
+        A.indices.astype(np.int32),
+        np.ascontiguousarray(A.data, dtype=np.float64),
+        MatrixType.CSC,
+    )
 
 
 class ShiftInvertOperator(LinearOperator):
-    """``x -> (L - sigma M)^{-1} x`` by one sparse LU factorization.
+    """``x -> A^{-1} x`` for a symmetric positive definite ``A = L - sigma M``.
 
-    ``L - sigma M`` is symmetric positive definite for ``sigma < 0``, so pivoting on the
-    diagonal is stable: the factorization keeps a symmetric fill-reducing order (METIS
-    nested dissection) instead of SuperLU's COLAMD, which is meant for unsymmetric
-    matrices and gives several times more fill on meshes.
+    ``method="cholesky"`` factors ``A = P^T R^T R P`` with CHOLMOD (cholespy; its own
+    fill-reducing order); ``method="lu"`` uses SuperLU with diagonal pivots (stable for
+    a positive definite matrix) on a geometric nested-dissection order of ``points``,
+    or on SuperLU's minimum degree of ``A + A^T`` without points. ``"auto"`` takes the
+    Cholesky factor when cholespy is installed: half the memory of the LU factor and
+    solves about twice as fast.
     """
 
-    def __init__(self, A: sp.spmatrix):
+    def __init__(self, A: sp.spmatrix, points: np.ndarray | None = None, method: str = "auto"):
         A = sp.csr_matrix(A)
         super().__init__(dtype=np.float64, shape=A.shape)
-        self.perm = _fill_reducing_order(A)
-        if self.perm is None:
-            self.lu = splu(A.tocsc())
-        else:
-            Ap = A[self.perm][:, self.perm].tocsc()
+        if method not in ("auto", "cholesky", "lu"):
+            raise ValueError(f"method must be 'auto', 'cholesky' or 'lu', got {method!r}")
+        self.method = "lu"
+        self.cholesky = _cholesky(A) if method != "lu" else None
+        if self.cholesky is not None:
+            self.method = "cholesky"
+            return
+        if method == "cholesky":
+            raise ImportError("method='cholesky' needs cholespy (pip install cholespy)")
+        if points is None:
+            self.perm = None
             self.lu = splu(
-                Ap,
-                permc_spec="NATURAL",
+                A.tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
                 diag_pivot_thresh=0.0,
                 options={"SymmetricMode": True},
             )
-            self.iperm = np.empty_like(self.perm)
-            self.iperm[self.perm] = np.arange(len(self.perm))
+            return
+        graph = A.copy()
+        graph.setdiag(0)
+        graph.eliminate_zeros()
+        self.perm = geometric_nested_dissection(
+            np.ascontiguousarray(points, dtype=np.float64), graph.indptr, graph.indices
+        )
+        self.iperm = np.empty_like(self.perm)
+        self.iperm[self.perm] = np.arange(len(self.perm))
+        self.lu = splu(
+            A[self.perm][:, self.perm].tocsc(),
+            permc_spec="NATURAL",
+            diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True},
+        )
 
     def _matvec(self, x):
         x = np.asarray(x, dtype=np.float64).ravel()
+        if self.method == "cholesky":
+            out = np.empty_like(x)
+            self.cholesky.solve(np.ascontiguousarray(x), out)
+            return out
         if self.perm is None:
             return self.lu.solve(x)
         return self.lu.solve(x[self.perm])[self.iperm]
@@ -206,13 +236,21 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
 
 
 def generalized_eigenpairs(
-    L: sp.spmatrix, M: sp.spmatrix, n_eigs: int, *, seed: int = 0
+    L: sp.spmatrix,
+    M: sp.spmatrix,
+    n_eigs: int,
+    *,
+    seed: int = 0,
+    points: np.ndarray | None = None,
+    method: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
     """The ``n_eigs`` smallest eigenpairs of ``L phi = lambda M phi``.
 
     Eigenvectors are M-orthonormal (``phi^T M phi = 1``) with signs fixed by
     :func:`fix_signs`; eigenvalues are ascending. ARPACK's start vector is drawn from
     ``numpy.random.default_rng(seed)``, so results are bitwise reproducible.
+    ``points`` (vertex coordinates) and ``method`` choose the factorization, see
+    :class:`ShiftInvertOperator`.
     """
     n = L.shape[0]
     mass = M.diagonal()
@@ -221,7 +259,7 @@ def generalized_eigenpairs(
         values, vectors = values[:n_eigs], vectors[:, :n_eigs]
     else:
         sigma = eigen_shift(L, M)
-        op = ShiftInvertOperator(L - sigma * M)
+        op = ShiftInvertOperator(L - sigma * M, points=points, method=method)
         v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
         values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
         order = np.argsort(values, kind="stable")
@@ -285,4 +323,4 @@ def laplacian_eigenfunctions(
     if not 1 <= n_eigs <= n:
         raise ValueError(f"n_eigs must be between 1 and {n} (the kept vertices), got {n_eigs}")
     L, M = build_laplacian(clean.vertices, clean.faces, laplacian)
-    return generalized_eigenpairs(L, M, n_eigs, seed=random_state)
+    return generalized_eigenpairs(L, M, n_eigs, seed=random_state, points=clean.vertices)

@@ -4,9 +4,11 @@ import numpy as np
 import pytest
 import scipy.linalg
 import trimesh
+from scipy.sparse.linalg import splu
 
 from sklearn_meshph import cotangent_laplacian, graph_laplacian, laplacian_eigenfunctions
-from sklearn_meshph.laplacian import generalized_eigenpairs
+from sklearn_meshph._ordering import geometric_nested_dissection
+from sklearn_meshph.laplacian import ShiftInvertOperator, generalized_eigenpairs
 
 
 def irregular_mesh(subdivisions=3, seed=0):
@@ -59,14 +61,17 @@ def test_eigenvalues_match_lapy_to_1e8():
 
 
 @pytest.mark.parametrize("laplacian", ["cotangent", "graph"])
-def test_sparse_solver_matches_dense_eigh(laplacian):
+@pytest.mark.parametrize("method", ["cholesky", "lu", "lu without points"])
+def test_sparse_solver_matches_dense_eigh(laplacian, method):
     vertices, faces = irregular_mesh(3)  # 642 vertices: the ARPACK path
     L, M = (
         cotangent_laplacian(vertices, faces)
         if laplacian == "cotangent"
         else graph_laplacian(faces, len(vertices))
     )
-    values, vectors = generalized_eigenpairs(L, M, 10)
+    points = None if method == "lu without points" else vertices
+    method = "cholesky" if method == "cholesky" else "lu"
+    values, vectors = generalized_eigenpairs(L, M, 10, points=points, method=method)
     ref_values, ref_vectors = scipy.linalg.eigh(L.toarray(), M.toarray())
     scale = ref_values[9]
     np.testing.assert_allclose(values, ref_values[:10], atol=1e-8 * scale, rtol=1e-8)
@@ -134,3 +139,41 @@ def test_degenerate_faces_do_not_change_the_spectrum():
         rtol=1e-10,
         atol=1e-10,
     )
+
+
+def test_geometric_nested_dissection_is_a_fill_reducing_permutation():
+    vertices, faces = irregular_mesh(5)  # 10,242 vertices, numbered at random
+    shuffle = np.random.default_rng(0).permutation(len(vertices))
+    vertices, faces = vertices[shuffle], np.argsort(shuffle)[faces]
+    L, M = cotangent_laplacian(vertices, faces)
+    A = (L + 1e-3 * M).tocsr()
+    graph = A.copy()
+    graph.setdiag(0)
+    graph.eliminate_zeros()
+    perm = geometric_nested_dissection(vertices, graph.indptr, graph.indices)
+    np.testing.assert_array_equal(np.sort(perm), np.arange(len(vertices)))
+    ordered = ShiftInvertOperator(A, points=vertices, method="lu")
+    natural = splu(A.tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0)
+    colamd = splu(A.tocsc(), permc_spec="COLAMD", diag_pivot_thresh=0.0)
+    fill = ordered.lu.L.nnz + ordered.lu.U.nnz
+    assert fill < 0.05 * (natural.L.nnz + natural.U.nnz)
+    assert fill < 0.75 * (colamd.L.nnz + colamd.U.nnz)
+    x = np.random.default_rng(0).random(len(vertices))
+    y = ordered.matvec(x)
+    backward_error = np.abs(A @ y - x).max() / (abs(A).sum(axis=1).max() * np.abs(y).max())
+    assert backward_error < 1e-14
+
+
+def test_cholesky_and_lu_agree_and_indefinite_matrices_are_refused():
+    vertices, faces = irregular_mesh(4)
+    L, M = cotangent_laplacian(vertices, faces)
+    x = np.random.default_rng(1).random(len(vertices))
+    A = L + 1e-2 * M
+    by_cholesky = ShiftInvertOperator(A, points=vertices, method="cholesky")
+    by_lu = ShiftInvertOperator(A, points=vertices, method="lu")
+    assert by_cholesky.method == "cholesky" and by_lu.method == "lu"
+    np.testing.assert_allclose(by_cholesky.matvec(x), by_lu.matvec(x), rtol=1e-9)
+    with pytest.raises(ValueError, match="not positive definite"):
+        ShiftInvertOperator(L - 10.0 * M, method="cholesky")
+    with pytest.raises(ValueError, match="method must be"):
+        ShiftInvertOperator(A, method="qr")
