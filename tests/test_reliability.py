@@ -222,3 +222,21 @@ def test_the_cache_key_follows_the_mesh_content(tmp_path, good):
     assert np.array_equal(first.values, again.values)
     entries = [p for p in tmp_path.rglob("output.pkl")]
     assert len(entries) == 2
+
+
+def test_whole_pipeline_identical_for_any_n_jobs_and_the_threading_backend():
+    from joblib import parallel_backend
+
+    meshes, _ = make_shapes(n_per_class=1, random_state=2, return_X_y=True)
+
+    def steps(n_jobs):
+        return make_pipeline(
+            LaplacianEigenTransformer(n_jobs=n_jobs),
+            LowerStarPersistence(n_jobs=n_jobs),
+            DiagramDistance(metric="wasserstein", n_jobs=n_jobs),
+        )
+
+    serial = steps(1).fit_transform(meshes)
+    np.testing.assert_array_equal(steps(2).fit_transform(meshes), serial)
+    with parallel_backend("threading"):
+        np.testing.assert_array_equal(steps(2).fit_transform(meshes), serial)
