@@ -236,8 +236,93 @@ def _lower_bound(a, b, by_birth, births):
 
 
 @numba.njit(cache=True)
+def _one_sided_bottleneck(a, b):
+    """Smallest ``t`` at which every point of ``a`` goes to a point of ``b`` or to the
+    diagonal within ``t``, points of ``b`` used at most once (the diagonal of ``b``
+    is ignored: by Mendelsohn-Dulmage, the bottleneck distance is the larger of the two
+    one-sided values).
+
+    Successive minimax augmenting paths: each point of ``a`` in turn joins the matching
+    along the alternating path whose largest edge is smallest (Dijkstra with ``max`` in
+    place of ``+``), and ``t`` is the largest of these. Optimal at every step: a
+    matching of the points so far within the optimum ``B`` contains, with the current
+    one (all edges <= t <= B), an augmenting path from the new point within ``B``.
+    O(n^2 m) at worst, microseconds for the diagrams of real meshes.
+    """
+    n, m = len(a), len(b)
+    row4col = np.full(m, -1, np.int64)
+    col4row = np.full(n, -1, np.int64)
+    key = np.empty(m)
+    path = np.empty(m, np.int64)
+    done = np.empty(m, np.bool_)
+    t = 0.0
+    for root in range(n):
+        key[:] = np.inf
+        done[:] = False
+        best_diagonal = np.inf
+        diagonal_row = -1
+        i = root
+        reach = 0.0  # largest edge on the way to row i
+        while True:
+            to_diagonal = max(reach, (a[i, 1] - a[i, 0]) / 2.0)
+            if to_diagonal < best_diagonal:
+                best_diagonal = to_diagonal
+                diagonal_row = i
+            lowest = np.inf
+            column = -1
+            for j in range(m):
+                if done[j]:
+                    continue
+                c = max(reach, max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1])))
+                if c < key[j]:
+                    key[j] = c
+                    path[j] = i
+                if key[j] < lowest or (key[j] == lowest and row4col[j] == -1):
+                    lowest = key[j]
+                    column = j
+            if best_diagonal <= lowest:
+                t = max(t, best_diagonal)
+                r = diagonal_row
+                j = col4row[r]
+                col4row[r] = _DIAGONAL
+                if r == root:
+                    break
+            else:
+                done[column] = True
+                if row4col[column] >= 0:
+                    i = row4col[column]
+                    reach = lowest
+                    continue
+                t = max(t, lowest)
+                j = column
+            while True:  # augment back to the root
+                r = path[j]
+                row4col[j] = r
+                previous = col4row[r]
+                col4row[r] = j
+                if r == root:
+                    break
+                j = previous
+            break
+    return t
+
+
+# Below this many point pairs (300 x 300) the minimax augmenting paths beat the threshold
+# search (measured: 0.33 ms against 0.94 ms at 100 x 100, even at 400 x 400).
+_SMALL_PAIRS = 90_000
+
+
+@numba.njit(cache=True)
 def _bottleneck_finite(a, b):
-    """Exact bottleneck distance of two finite diagrams.
+    """Exact bottleneck distance of two finite diagrams."""
+    if len(a) * len(b) <= _SMALL_PAIRS:
+        return max(_one_sided_bottleneck(a, b), _one_sided_bottleneck(b, a))
+    return _threshold_bottleneck(a, b)
+
+
+@numba.njit(cache=True)
+def _threshold_bottleneck(a, b):
+    """Exact bottleneck distance of two finite diagrams, for large ones.
 
     The distance is one of the candidate values: 0, a half-persistence (point to the
     diagonal) or a pairwise L-infinity distance, and at least the largest cheapest move

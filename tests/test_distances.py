@@ -8,6 +8,7 @@ from scipy.optimize import linear_sum_assignment
 
 from sklearn_meshph import bottleneck_distance, wasserstein_distance
 from sklearn_meshph.diagrams import check_diagram
+from sklearn_meshph.distances import _threshold_bottleneck
 
 gudhi = pytest.importorskip("gudhi")
 hera = pytest.importorskip("gudhi.hera")
@@ -57,6 +58,8 @@ def diagrams(draw, max_points=8, tied=None):
 def test_bottleneck_equals_brute_force_and_hera(a, b):
     ours = bottleneck_distance(a, b)
     assert ours == brute_force_bottleneck(a, b)
+    # The threshold search used for large diagrams, on the same small ones.
+    assert _threshold_bottleneck(a, b) == ours == _threshold_bottleneck(b, a)
     assert ours == pytest.approx(hera.bottleneck_distance(a, b, delta=0), abs=1e-12)
 
 
