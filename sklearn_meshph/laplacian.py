@@ -143,15 +143,23 @@ def _cholesky(A: sp.spmatrix):
     )
 
 
+# Above this many unknowns "auto" takes the Cholesky factor for its memory: at 655k
+# vertices SuperLU's L and U need 2.5 GB, CHOLMOD's factor 1 GB; below, the LU factor on
+# the geometric order is faster (0.55 s against 0.65 s at 41k vertices, 4.0 against 4.8 s
+# at 164k, eigensolve included; benchmarks/bench_eigen.py).
+_CHOLESKY_ABOVE = 250_000
+
+
 class ShiftInvertOperator(LinearOperator):
     """``x -> A^{-1} x`` for a symmetric positive definite ``A = L - sigma M``.
 
-    ``method="cholesky"`` factors ``A = P^T R^T R P`` with CHOLMOD (cholespy; its own
-    fill-reducing order); ``method="lu"`` uses SuperLU with diagonal pivots (stable for
-    a positive definite matrix) on a geometric nested-dissection order of ``points``,
-    or on SuperLU's minimum degree of ``A + A^T`` without points. ``"auto"`` takes the
-    Cholesky factor when cholespy is installed: half the memory of the LU factor and
-    solves about twice as fast.
+    ``method="lu"`` uses SuperLU with diagonal pivots (stable for a positive definite
+    matrix) on a geometric nested-dissection order of ``points``, or on SuperLU's
+    minimum degree of ``A + A^T`` without points. ``method="cholesky"`` factors ``A``
+    with CHOLMOD (cholespy; its own fill-reducing order): half the memory of the LU
+    factor and solves twice as fast, but a slower factorization (reference BLAS).
+    ``"auto"`` takes the LU factor up to 250,000 unknowns and the Cholesky factor above,
+    when cholespy is installed.
     """
 
     def __init__(self, A: sp.spmatrix, points: np.ndarray | None = None, method: str = "auto"):
@@ -159,13 +167,16 @@ class ShiftInvertOperator(LinearOperator):
         super().__init__(dtype=np.float64, shape=A.shape)
         if method not in ("auto", "cholesky", "lu"):
             raise ValueError(f"method must be 'auto', 'cholesky' or 'lu', got {method!r}")
-        self.method = "lu"
-        self.cholesky = _cholesky(A) if method != "lu" else None
+        large = A.shape[0] > _CHOLESKY_ABOVE
+        self.cholesky = (
+            _cholesky(A) if method == "cholesky" or (method == "auto" and large) else None
+        )
         if self.cholesky is not None:
             self.method = "cholesky"
             return
         if method == "cholesky":
             raise ImportError("method='cholesky' needs cholespy (pip install cholespy)")
+        self.method = "lu"
         if points is None:
             self.perm = None
             self.lu = splu(
@@ -218,8 +229,9 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
     The skewness ``sum_i m_i phi_i^3`` is a geometric quantity: it has the same sign on
     the same shape at any resolution, scale or pose. When it vanishes (relative to
     ``sum_i m_i |phi_i|^3``, below 1e-8: antisymmetric eigenfunctions of symmetric
-    shapes), the entry of largest absolute value (lowest index among ties) is made
-    positive instead.
+    shapes), the entry of largest absolute value is made positive instead, the lowest
+    index among entries within 1e-6 of that largest value (symmetric shapes have exact
+    ties, which rounding would otherwise break one way or the other).
     """
     vectors = vectors.copy()
     for j in range(vectors.shape[1]):
@@ -229,7 +241,8 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
         if abs(skew) > 1e-8 * scale:
             flip = skew < 0
         else:
-            flip = v[np.argmax(np.abs(v))] < 0
+            size = np.abs(v)
+            flip = v[np.flatnonzero(size >= size.max() * (1 - 1e-6))[0]] < 0
         if flip:
             vectors[:, j] = -v
     return vectors
