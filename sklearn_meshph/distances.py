@@ -742,17 +742,15 @@ def _row_reduction(ptr, cols, costs, u, v, col4row, row4col, n):
                     else:
                         second, j2 = h, cols[e]
             owner = row4col[j1]
-            if first < second:
+            u[i] = first
+            if j2 < 0:
+                pass  # the private diagonal column is the row's only option
+            elif first < second:
                 v[j1] -= second - first
                 u[i] = second
-            elif owner >= 0 and j2 >= 0:
+            elif owner >= 0:
                 j1 = j2
                 owner = row4col[j1]
-                u[i] = first
-            else:
-                u[i] = first
-            if j2 < 0:
-                u[i] = first
             if owner >= 0:
                 col4row[owner] = -1
             col4row[i] = j1
@@ -768,10 +766,35 @@ def _row_reduction(ptr, cols, costs, u, v, col4row, row4col, n):
 
 
 @numba.njit(cache=True)
+def _lexicographic(d):
+    """Rows of ``d`` sorted by birth, then death."""
+    by_death = np.argsort(d[:, 1], kind="mergesort")
+    return d[by_death[np.argsort(d[by_death, 0], kind="mergesort")]]
+
+
+@numba.njit(cache=True)
+def _same_points(a, b):
+    """Whether two diagrams hold the same points (as multisets)."""
+    if len(a) != len(b):
+        return False
+    sa, sb = _lexicographic(a), _lexicographic(b)
+    for i in range(len(a)):
+        if sa[i, 0] != sb[i, 0] or sa[i, 1] != sb[i, 1]:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
 def _wasserstein_power(a, b, order, internal_p):
-    """Optimal sum of cost^order over matchings of two finite diagrams."""
+    """Optimal sum of cost^order over matchings of two finite diagrams.
+
+    Equal diagrams give exactly 0: in floating point the solver's reduced costs cannot
+    tell the identity matching from one that swaps two points 1e-16 apart.
+    """
     if not _precedes(a, b):  # so that d(a, b) == d(b, a) bit for bit
         a, b = b, a
+    if _same_points(a, b):
+        return 0.0
     return _optimal_transport(a, b, order, internal_p)[0]
 
 

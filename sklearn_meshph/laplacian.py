@@ -11,9 +11,9 @@ Two discretizations:
   with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
 
 Eigenpairs come from shift-invert Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`)
-with a small negative shift and one sparse Cholesky factorization of ``L - sigma M``
-(CHOLMOD, through cholespy); without cholespy, a sparse LU (SuperLU) on a geometric
-nested-dissection order, so that fill-in stays near-linear either way.
+with a small negative shift and one sparse factorization of ``L - sigma M``: SuperLU on a
+geometric nested-dissection order of the vertices (fast to compute, near-linear fill),
+or for the largest meshes CHOLMOD's Cholesky through cholespy (half the memory).
 """
 
 from __future__ import annotations
@@ -144,9 +144,10 @@ def _cholesky(A: sp.spmatrix):
 
 
 # Above this many unknowns "auto" takes the Cholesky factor for its memory: at 655k
-# vertices SuperLU's L and U need 2.5 GB, CHOLMOD's factor 1 GB; below, the LU factor on
-# the geometric order is faster (0.55 s against 0.65 s at 41k vertices, 4.0 against 4.8 s
-# at 164k, eigensolve included; benchmarks/bench_eigen.py).
+# vertices the process peaks at 2.5 GB with SuperLU's L and U, 1.3 GB with CHOLMOD's
+# factor; below, the LU factor on the geometric order is faster (factorization and 11
+# eigenpairs on the bench_eigen meshes: 0.55 s against 0.65 s at 41k vertices, 4.0 s
+# against 4.8 s at 164k).
 _CHOLESKY_ABOVE = 250_000
 
 
@@ -155,7 +156,7 @@ class ShiftInvertOperator(LinearOperator):
 
     ``method="lu"`` uses SuperLU with diagonal pivots (stable for a positive definite
     matrix) on a geometric nested-dissection order of ``points``, or on SuperLU's
-    minimum degree of ``A + A^T`` without points. ``method="cholesky"`` factors ``A``
+    COLAMD order without points (about 1.5 times the fill). ``method="cholesky"`` factors ``A``
     with CHOLMOD (cholespy; its own fill-reducing order): half the memory of the LU
     factor and solves twice as fast, but a slower factorization (reference BLAS).
     ``"auto"`` takes the LU factor up to 250,000 unknowns and the Cholesky factor above,
@@ -181,7 +182,7 @@ class ShiftInvertOperator(LinearOperator):
             self.perm = None
             self.lu = splu(
                 A.tocsc(),
-                permc_spec="MMD_AT_PLUS_A",
+                permc_spec="COLAMD",
                 diag_pivot_thresh=0.0,
                 options={"SymmetricMode": True},
             )

@@ -240,3 +240,13 @@ def test_wasserstein_on_a_tied_grid_equals_pot():
     for order in (1.0, 2.0):
         ref = gudhi_wasserstein.wasserstein_distance(a, b, order=order, internal_p=np.inf)
         assert wasserstein_distance(a, b, order=order) == pytest.approx(ref, rel=1e-10)
+
+
+def test_equal_diagrams_are_at_distance_exactly_zero():
+    """Found by hypothesis: two points one ulp apart made the solver's reduced costs tie,
+    and it returned 1.6e-16 for d(a, a)."""
+    a = np.array([[0.0, np.nextafter(1.0, 0.0)], [0.0, 1.0], [0.25, 0.5]])
+    for distance in (bottleneck_distance, wasserstein_distance):
+        assert distance(a, a) == 0.0
+        assert distance(a, a[::-1]) == 0.0
+        assert distance(a, a[[1, 0, 2]]) == 0.0
