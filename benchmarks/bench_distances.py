@@ -66,12 +66,8 @@ def per_pair(sizes, rng):
         mine = {k: median_time(repeats, f, a, b) for k, f in ours.items()}
         theirs = {}
         for name, func in others.items():
-            if n >= 5000 and name in (
-                "persim bottleneck",
-                "gudhi exact bottleneck",
-                "POT exact W2",
-            ):
-                theirs[name] = float("nan")  # tens of seconds per pair (ANCHORS.md)
+            if n >= 5000 and name in ("persim bottleneck", "gudhi exact bottleneck"):
+                theirs[name] = float("nan")  # minutes per pair (ANCHORS.md)
                 continue
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

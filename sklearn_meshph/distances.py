@@ -550,8 +550,8 @@ def _candidate_edges(a, b, da, db, order, internal_p):
     Any matching that uses another pair costs no less after sending both of its points
     to the diagonal instead, so an optimal matching among these pairs is optimal. Points
     of ``b`` are scanned through a band of births around each point of ``a``.
-    Returns CSR arrays (row pointers, columns, reduced costs ``c - db``) with the private
-    diagonal column ``m + i`` of each row last.
+    Returns CSR arrays (row pointers, columns, reduced costs ``c - db``): each row's pairs
+    by increasing cost, then its private diagonal column ``m + i``.
     """
     n, m = len(a), len(b)
     by_birth = np.argsort(b[:, 0], kind="mergesort")
@@ -578,6 +578,7 @@ def _candidate_edges(a, b, da, db, order, internal_p):
             grown_costs = np.empty(capacity)
             grown_costs[:k] = costs[:k]
             costs = grown_costs
+        first = k
         for s in range(lo, hi):
             j = by_birth[s]
             c = _power(_ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p), order)
@@ -585,6 +586,9 @@ def _candidate_edges(a, b, da, db, order, internal_p):
                 cols[k] = j
                 costs[k] = c - db[j]
                 k += 1
+        ascending = first + np.argsort(costs[first:k], kind="mergesort")
+        cols[first:k] = cols[ascending]
+        costs[first:k] = costs[ascending]
         cols[k] = m + i
         costs[k] = da[i]
         k += 1
@@ -643,21 +647,32 @@ def _transport_rows(a, b, order, internal_p):
         i = root
         base = 0.0
         sink = -1
+        # The search stops at the first free column it reaches, so a column no closer
+        # than the closest free one seen so far is never reached: not queued.
+        bound = np.inf
         while True:
             visited[n_visited] = i
             n_visited += 1
             ui = u[i]
-            for e in range(ptr[i], ptr[i + 1]):
+            last = ptr[i + 1] - 1  # the private diagonal column, always free: first
+            for f in range(ptr[i] - 1, last):
+                e = last if f < ptr[i] else f
                 j = cols[e]
+                # Potentials of columns never rise above 0, so reduced costs are at
+                # least base + cost - ui: past the bound, the rest of the row is too.
+                if e != last and base + costs[e] - ui > bound:
+                    break
                 if done[j]:
                     continue
                 reduced = base + costs[e] - ui - v[j]
-                if reduced < dist[j]:
+                if reduced < dist[j] and reduced <= bound:
                     if dist[j] == np.inf:
                         touched[n_touched] = j
                         n_touched += 1
                     dist[j] = reduced
                     path[j] = i
+                    if row4col[j] == -1:
+                        bound = reduced
                     size = _heap_push(keys, items, size, reduced, j)
             j = -1
             while size > 0:
