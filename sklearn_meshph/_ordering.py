@@ -54,8 +54,9 @@ def _split(points, ids, start, stop, direction, coords, label, left, right):
 
 
 @numba.njit(cache=True)
-def _boundary(ids, start, stop, indptr, indices, label, side, other):
-    """Number of vertices labelled ``side`` with a neighbour labelled ``other``."""
+def _boundary(ids, start, stop, indptr, indices, label, side, other, out):
+    """Number of vertices labelled ``side`` with a neighbour labelled ``other``; they are
+    written to ``out`` unless it is empty."""
     count = 0
     for k in range(start, stop):
         v = ids[k]
@@ -63,6 +64,8 @@ def _boundary(ids, start, stop, indptr, indices, label, side, other):
             continue
         for e in range(indptr[v], indptr[v + 1]):
             if label[indices[e]] == other:
+                if len(out):
+                    out[count] = v
                 count += 1
                 break
     return count
@@ -95,6 +98,7 @@ def geometric_nested_dissection(points, indptr, indices, leaf_size=16, try_all=4
     label = np.zeros(n, np.int64)
     scratch = np.empty(n, np.int64)
     coords = np.empty(n)
+    none = scratch[:0]  # _boundary only counts
     # Stack of sets: ids[start:stop], numbered from position lo, all labelled lab.
     stack = np.empty((2 * n + 2, 4), np.int64)
     stack[0] = (0, n, 0, 0)
@@ -115,29 +119,20 @@ def geometric_nested_dissection(points, indptr, indices, leaf_size=16, try_all=4
             for d in range(len(directions)):
                 _split(points, ids, start, stop, directions[d], coords, label, left, right)
                 cut = min(
-                    _boundary(ids, start, stop, indptr, indices, label, left, right),
-                    _boundary(ids, start, stop, indptr, indices, label, right, left),
+                    _boundary(ids, start, stop, indptr, indices, label, left, right, none),
+                    _boundary(ids, start, stop, indptr, indices, label, right, left, none),
                 )
                 if cut < best_cut:
                     best, best_cut = d, cut
         _split(points, ids, start, stop, directions[best], coords, label, left, right)
         # The shorter boundary becomes the separator, numbered last.
-        if _boundary(ids, start, stop, indptr, indices, label, left, right) < _boundary(
-            ids, start, stop, indptr, indices, label, right, left
+        if _boundary(ids, start, stop, indptr, indices, label, left, right, none) < _boundary(
+            ids, start, stop, indptr, indices, label, right, left, none
         ):
             cut, other = left, right
         else:
             cut, other = right, left
-        n_sep = 0
-        for k in range(start, stop):
-            v = ids[k]
-            if label[v] != cut:
-                continue
-            for e in range(indptr[v], indptr[v + 1]):
-                if label[indices[e]] == other:
-                    scratch[n_sep] = v
-                    n_sep += 1
-                    break
+        n_sep = _boundary(ids, start, stop, indptr, indices, label, cut, other, scratch)
         for k in range(n_sep):
             perm[lo + size - 1 - k] = scratch[k]
             label[scratch[k]] = -1

@@ -236,6 +236,19 @@ def _lower_bound(a, b, by_birth, births):
 
 
 @numba.njit(cache=True)
+def _augment(path, row4col, col4row, j, root):
+    """Flip the alternating path that ends at free column ``j`` back to ``root``."""
+    while True:
+        r = path[j]
+        row4col[j] = r
+        previous = col4row[r]
+        col4row[r] = j
+        if r == root:
+            return
+        j = previous
+
+
+@numba.njit(cache=True)
 def _one_sided_bottleneck(a, b):
     """Smallest ``t`` at which every point of ``a`` goes to a point of ``b`` or to the
     diagonal within ``t``, points of ``b`` used at most once (the diagonal of ``b``
@@ -295,14 +308,7 @@ def _one_sided_bottleneck(a, b):
                     continue
                 t = max(t, lowest)
                 j = column
-            while True:  # augment back to the root
-                r = path[j]
-                row4col[j] = r
-                previous = col4row[r]
-                col4row[r] = j
-                if r == root:
-                    break
-                j = previous
+            _augment(path, row4col, col4row, j, root)
             break
     return t
 
@@ -699,15 +705,7 @@ def _transport_rows(a, b, order, internal_p):
                 v[j] -= min_value - dist[j]
             dist[j] = np.inf
             done[j] = False
-        j = sink
-        while True:
-            r = path[j]
-            row4col[j] = r
-            previous = col4row[r]
-            col4row[r] = j
-            if r == root:
-                break
-            j = previous
+        _augment(path, row4col, col4row, sink, root)
     total = 0.0
     for j in range(m):
         if row4col[j] == -1:
