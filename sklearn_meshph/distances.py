@@ -355,27 +355,16 @@ def _threshold_bottleneck(a, b):
     count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
     if count > _COLLECT:
         lo, hi = _search(a, b, sorted_a, sorted_b, diagonal, lo, hi, False)
-    while True:
         count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
-        if count <= _COLLECT:
-            values = np.empty(count + n + m)
-            _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, values)
-            values[count:] = diagonal
-            # The next few candidates above lo by linear scans, before sorting them all.
-            for _ in range(4):
-                following = hi
-                for v in values:
-                    if lo < v < following:
-                        following = v
-                if following == hi:
-                    return hi
-                if _feasible(a, b, sorted_a, sorted_b, following):
-                    return following
-                lo = following
-            return _search(a, b, sorted_a, sorted_b, values, lo, hi, True)[1]
-        sample = np.empty(_SAMPLE)
+    sample = np.empty(_SAMPLE)
+    while count > _COLLECT:
         _pair_values(a, b, order_b, sorted_b[1], lo, hi, count // _SAMPLE, sample)
         lo, hi = _search(a, b, sorted_a, sorted_b, sample, lo, hi, False)
+        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
+    values = np.empty(count + n + m)
+    _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, values)
+    values[count:] = diagonal
+    return _search(a, b, sorted_a, sorted_b, values, lo, hi, True)[1]
 
 
 @numba.njit(cache=True)
