@@ -246,18 +246,14 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
     index among entries within 1e-6 of that largest value (symmetric shapes have exact
     ties, which rounding would otherwise break one way or the other).
     """
-    vectors = vectors.copy()
-    for j in range(vectors.shape[1]):
-        v = vectors[:, j]
-        skew = float(np.dot(mass, v**3))
-        scale = float(np.dot(mass, np.abs(v) ** 3))
-        if abs(skew) > 1e-8 * scale:
-            flip = skew < 0
-        else:
-            size = np.abs(v)
-            flip = v[np.flatnonzero(size >= size.max() * (1 - 1e-6))[0]] < 0
-        if flip:
-            vectors[:, j] = -v
+    cubes = vectors**3
+    skew = mass @ cubes
+    scale = mass @ np.abs(cubes)
+    flip = skew < 0
+    for j in np.flatnonzero(np.abs(skew) <= 1e-8 * scale):
+        size = np.abs(vectors[:, j])
+        flip[j] = vectors[np.flatnonzero(size >= size.max() * (1 - 1e-6))[0], j] < 0
+    vectors = vectors * np.where(flip, -1.0, 1.0)
     return vectors
 
 
