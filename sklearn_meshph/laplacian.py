@@ -11,9 +11,10 @@ Two discretizations:
   with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
 
 Eigenpairs come from shift-invert Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`)
-with a small negative shift and one sparse factorization of ``L - sigma M``: SuperLU on a
-geometric nested-dissection order of the vertices (fast to compute, near-linear fill),
-or for the largest meshes CHOLMOD's Cholesky through cholespy (half the memory).
+with a small negative shift and one sparse factorization of ``L - sigma M``: MKL
+PARDISO's Cholesky when an MKL runtime is installed, else SuperLU on a geometric
+nested-dissection order of the vertices (fast to compute, near-linear fill), or for the
+largest meshes CHOLMOD's Cholesky through cholespy (half the memory).
 """
 
 from __future__ import annotations
@@ -156,8 +157,8 @@ class ShiftInvertOperator(LinearOperator):
     """``x -> A^{-1} x`` for a symmetric positive definite ``A = L - sigma M``.
 
     ``method="pardiso"`` factors ``A`` with Intel MKL PARDISO's supernodal Cholesky
-    (METIS order), when an MKL runtime is installed (the ``mkl`` extra): the fastest, by
-    three times in the factorization and 2.5 times per solve on the bench_eigen meshes.
+    (METIS order), when an MKL runtime is installed (the ``mkl`` extra): the fastest, two
+    to three times in the factorization and five times per solve at 41k vertices.
     ``method="lu"`` uses SuperLU with diagonal pivots (stable for a positive definite
     matrix) on a geometric nested-dissection order of ``points``, or on SuperLU's
     COLAMD order without points (about 1.5 times the fill). ``method="cholesky"`` factors
