@@ -142,27 +142,29 @@ def main():
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--subdivisions", type=int, default=8, help="icosphere level")
     parser.add_argument("--skip-mesh", action="store_true")
+    parser.add_argument("--skip-matrix", action="store_true")
     args = parser.parse_args()
 
-    n = args.n_diagrams
-    pairs = n * (n - 1) // 2
-    with tempfile.TemporaryDirectory() as folder:
-        ours = run(MATRIX, n, args.n_jobs, os.path.join(folder, "distances.npy"))
-    per_pair = anchor_per_pair(n)
-    print(f"bottleneck matrix of {n:,} diagrams (5-30 points): {pairs:,} pairs")
-    print(
-        f"ours: {ours['time']:.1f} s on {args.n_jobs} workers"
-        f" ({ours['time'] / pairs * 1e6 * args.n_jobs:.2f} us per pair per core)\n"
-        f"peak memory: main process {ours['anon_mb']:.0f} MB anonymous (sampled every 0.2 s;"
-        f" {ours['main_mb']:.0f} MB resident with the output's file-backed pages), largest"
-        f" worker {ours['worker_mb']:.0f} MB resident; output {n * n * 4 / 2**20:.0f} MB"
-        " float32, memory-mapped"
-    )
-    print("| anchor (one core, extrapolated) | s per pair | all pairs s | ours / anchor |")
-    print("|---|---|---|---|")
-    for name, seconds in per_pair.items():
-        total = seconds * pairs
-        print(f"| {name} | {seconds * 1e6:.1f} us | {total:.0f} | {ours['time'] / total:.4f} |")
+    if not args.skip_matrix:
+        n = args.n_diagrams
+        pairs = n * (n - 1) // 2
+        with tempfile.TemporaryDirectory() as folder:
+            ours = run(MATRIX, n, args.n_jobs, os.path.join(folder, "distances.npy"))
+        per_pair = anchor_per_pair(n)
+        print(f"bottleneck matrix of {n:,} diagrams (5-30 points): {pairs:,} pairs")
+        print(
+            f"ours: {ours['time']:.1f} s on {args.n_jobs} workers"
+            f" ({ours['time'] / pairs * 1e6 * args.n_jobs:.2f} us per pair per core)\n"
+            f"peak memory: main process {ours['anon_mb']:.0f} MB anonymous (sampled every 0.2 s;"
+            f" {ours['main_mb']:.0f} MB resident with the output's file-backed pages), largest"
+            f" worker {ours['worker_mb']:.0f} MB resident; output {n * n * 4 / 2**20:.0f} MB"
+            " float32, memory-mapped"
+        )
+        print("| anchor (one core, extrapolated) | s per pair | all pairs s | ours / anchor |")
+        print("|---|---|---|---|")
+        for name, seconds in per_pair.items():
+            total = seconds * pairs
+            print(f"| {name} | {seconds * 1e6:.1f} us | {total:.0f} | {ours['time'] / total:.4f} |")
 
     if not args.skip_mesh:
         mine = run(MESH, "ours", args.subdivisions)
