@@ -14,7 +14,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_memory, validate_data
 from threadpoolctl import threadpool_limits
 
-from ._mesh import COMPONENT_POLICIES, check_mesh, clean_mesh
+from ._mesh import COMPONENT_POLICIES, _where, check_mesh, clean_mesh
 from ._utils import as_sample_list, sequence_input_tags
 from .laplacian import LAPLACIANS, build_laplacian, generalized_eigenpairs
 from .scalar_field import ScalarField
@@ -46,7 +46,13 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eig
     if normalization == "area":
         M = M / M.diagonal().sum()
     n_eigs = min(n_eigs, len(clean.vertices))
-    values, vectors = generalized_eigenpairs(L, M, n_eigs, seed=seed, points=clean.vertices)
+    try:
+        values, vectors = generalized_eigenpairs(L, M, n_eigs, seed=seed, points=clean.vertices)
+    except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, SuperLU, PARDISO
+        raise ValueError(
+            f"{_where(index)}: the eigensolver failed on the cleaned mesh "
+            f"({len(clean.vertices)} vertices, {len(clean.faces)} faces): {error}"
+        ) from error
     return clean, values, vectors
 
 

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+import trimesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -240,3 +241,19 @@ def test_whole_pipeline_identical_for_any_n_jobs_and_the_threading_backend():
     np.testing.assert_array_equal(steps(2).fit_transform(meshes), serial)
     with parallel_backend("threading"):
         np.testing.assert_array_equal(steps(2).fit_transform(meshes), serial)
+
+
+def test_a_failing_eigensolver_names_the_sample(good, monkeypatch):
+    import sklearn_meshph.eigen as eigen
+
+    solve = eigen.generalized_eigenpairs
+
+    def failing(L, M, *args, **kwargs):
+        if L.shape[0] != len(good[0]):
+            raise ValueError("MKL PARDISO failed in phase 12: zero pivot")
+        return solve(L, M, *args, **kwargs)
+
+    monkeypatch.setattr(eigen, "generalized_eigenpairs", failing)
+    other = trimesh.creation.icosphere(3)
+    with pytest.raises(ValueError, match=r"^sample 1: the eigensolver failed .* zero pivot"):
+        LaplacianEigenTransformer().fit_transform([good, other])
