@@ -9,8 +9,8 @@ best of two round-robin rounds over all methods, peak memory the growth of the r
 set over the loaded mesh. "floor" is one sparse
 factorization of L - sigma M as ours does it, fill-reducing ordering included: MKL
 PARDISO's Cholesky when an MKL runtime is installed (the bench extra installs one), and
-in the "no-MKL" columns (SKLEARN_MESHPH_NO_MKL=1, the default install's path) SuperLU on
-geometric nested dissection up to 250k vertices, CHOLMOD above. The last table times the
+in the "no-MKL" columns (SKLEARN_MESHPH_NO_MKL=1, the default install's path) CHOLMOD's
+Cholesky through cholespy. The last table times the
 eigen stage over a dataset (the Sumner meshes, or 20 ellipsoids of 41k vertices) on one
 and on two joblib workers.
 """
