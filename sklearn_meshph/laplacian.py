@@ -24,7 +24,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
-from ._assembly import cotangent_weights, edge_matrix_csr
+from ._assembly import check_faces, cotangent_weights, edge_matrix_csr
 from ._mesh import check_mesh, clean_mesh
 from ._ordering import geometric_nested_dissection
 from ._pardiso import PardisoCholesky, pardiso_available
@@ -76,9 +76,17 @@ def cotangent_laplacian(
     (True, 12.33)
     """
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
-    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (n_vertices, 3), got {vertices.shape}")
     n = len(vertices)
+    faces = check_faces(faces, n)
     weights, double_area = cotangent_weights(vertices, faces)
+    if not (double_area > 0).all():  # also catches NaN coordinates
+        bad = int(np.flatnonzero(~(double_area > 0))[0])
+        raise ValueError(
+            f"face {bad} has zero area (or a non-finite vertex): the cotangent Laplacian "
+            "needs non-degenerate triangles; clean the mesh with clean_mesh first"
+        )
     L = sp.csr_matrix(edge_matrix_csr(n, faces, weights, True), shape=(n, n))
     mass = np.bincount(faces.ravel(), weights=np.repeat(double_area / 6.0, 3), minlength=n)
     return L, sp.diags(mass)
@@ -100,7 +108,7 @@ def graph_laplacian(faces: np.ndarray, n_vertices: int) -> tuple[sp.csr_matrix, 
     """
     from ._mesh import mesh_edges
 
-    adjacency = mesh_edges(np.asarray(faces, dtype=np.int64), n_vertices)
+    adjacency = mesh_edges(check_faces(faces, n_vertices), n_vertices)
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     return (sp.diags(degree) - adjacency).tocsr(), sp.identity(n_vertices, format="dia")
 

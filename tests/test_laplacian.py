@@ -262,3 +262,17 @@ def test_compiled_assembly_matches_a_dense_loop_and_is_canonical():
     np.testing.assert_allclose(L.toarray(), dense, atol=1e-15)
     adjacency, _ = graph_laplacian(faces, n)
     assert adjacency.has_canonical_format and adjacency.nnz == n + 2 * 9  # 9 edges
+
+
+def test_public_laplacians_refuse_bad_faces_instead_of_reading_out_of_bounds():
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    with pytest.raises(ValueError, match=r"face 1 has index \[1, 2, 4\] out of range"):
+        cotangent_laplacian(vertices, [[0, 1, 2], [1, 2, 4]])
+    with pytest.raises(ValueError, match="out of range for 4 vertices"):
+        graph_laplacian(np.array([[0, 1, -1]]), 4)
+    with pytest.raises(ValueError, match=r"shape \(n_faces, 3\)"):
+        cotangent_laplacian(vertices, [0, 1, 2])
+    with pytest.raises(ValueError, match="face 1 has zero area"):
+        cotangent_laplacian(vertices, [[0, 1, 2], [0, 1, 1]])
+    with pytest.raises(ValueError, match="face 0 has zero area"):
+        cotangent_laplacian(np.full((3, 3), np.nan), [[0, 1, 2]])
