@@ -12,6 +12,21 @@ import numba
 import numpy as np
 
 
+@numba.njit(cache=True, inline="always")
+def _edges_and_double_area(vertices, a, b, c):
+    """Edge vectors a->b and a->c of a triangle and twice its area."""
+    ux = vertices[b, 0] - vertices[a, 0]
+    uy = vertices[b, 1] - vertices[a, 1]
+    uz = vertices[b, 2] - vertices[a, 2]
+    vx = vertices[c, 0] - vertices[a, 0]
+    vy = vertices[c, 1] - vertices[a, 1]
+    vz = vertices[c, 2] - vertices[a, 2]
+    nx = uy * vz - uz * vy
+    ny = uz * vx - ux * vz
+    nz = ux * vy - uy * vx
+    return ux, uy, uz, vx, vy, vz, np.sqrt(nx * nx + ny * ny + nz * nz)
+
+
 @numba.njit(cache=True)
 def nondegenerate_faces(vertices, faces, sine):
     """Faces with three distinct indices and twice the area above ``sine`` times the
@@ -23,17 +38,8 @@ def nondegenerate_faces(vertices, faces, sine):
         if a == b or b == c or a == c:
             keep[f] = False
             continue
-        ux = vertices[b, 0] - vertices[a, 0]
-        uy = vertices[b, 1] - vertices[a, 1]
-        uz = vertices[b, 2] - vertices[a, 2]
-        vx = vertices[c, 0] - vertices[a, 0]
-        vy = vertices[c, 1] - vertices[a, 1]
-        vz = vertices[c, 2] - vertices[a, 2]
+        ux, uy, uz, vx, vy, vz, double_area = _edges_and_double_area(vertices, a, b, c)
         wx, wy, wz = vx - ux, vy - uy, vz - uz
-        nx = uy * vz - uz * vy
-        ny = uz * vx - ux * vz
-        nz = ux * vy - uy * vx
-        double_area = np.sqrt(nx * nx + ny * ny + nz * nz)
         longest = max(ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz)
         longest = max(longest, wx * wx + wy * wy + wz * wz)
         keep[f] = double_area > sine * longest
@@ -53,16 +59,7 @@ def cotangent_weights(vertices, faces):
     double_areas = np.empty(m)
     for f in range(m):
         a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
-        ux = vertices[b, 0] - vertices[a, 0]
-        uy = vertices[b, 1] - vertices[a, 1]
-        uz = vertices[b, 2] - vertices[a, 2]
-        vx = vertices[c, 0] - vertices[a, 0]
-        vy = vertices[c, 1] - vertices[a, 1]
-        vz = vertices[c, 2] - vertices[a, 2]
-        nx = uy * vz - uz * vy
-        ny = uz * vx - ux * vz
-        nz = ux * vy - uy * vx
-        double_area = np.sqrt(nx * nx + ny * ny + nz * nz)
+        ux, uy, uz, vx, vy, vz, double_area = _edges_and_double_area(vertices, a, b, c)
         double_areas[f] = double_area
         wx, wy, wz = vx - ux, vy - uy, vz - uz  # from b to c
         # corner a: edges a->b and a->c; corner b: b->c and b->a; corner c: c->a, c->b
