@@ -143,23 +143,3 @@ def edge_matrix_csr(n, faces, weights, laplacian):
             data[diagonal_at] = -total
         indptr[r + 1] = pos
     return data[:pos], indices[:pos], indptr  # scipy's (data, indices, indptr) order
-
-
-def check_faces(faces, n_vertices: int) -> np.ndarray:
-    """``faces`` as a C-contiguous int64 ``(m, 3)`` array of indices below ``n_vertices``.
-
-    The compiled loops do not check bounds, so the public functions that reach them
-    validate first: a bad index is a ``ValueError``, never a read out of bounds.
-    """
-    faces = np.asarray(faces)
-    if faces.ndim != 2 or faces.shape[1] != 3:
-        raise ValueError(f"faces must have shape (n_faces, 3), got {faces.shape}")
-    if faces.dtype.kind not in "iu":
-        raise ValueError(f"face indices must be integers, got dtype {faces.dtype}")
-    faces = np.ascontiguousarray(faces, dtype=np.int64)
-    if len(faces) and (faces.min() < 0 or faces.max() >= n_vertices):
-        bad = int(np.flatnonzero(((faces < 0) | (faces >= n_vertices)).any(axis=1))[0])
-        raise ValueError(
-            f"face {bad} has index {faces[bad].tolist()} out of range for {n_vertices} vertices"
-        )
-    return faces

@@ -105,19 +105,33 @@ def check_mesh(mesh, *, index: int | None = None) -> tuple[np.ndarray, np.ndarra
         bad = int(np.flatnonzero(~np.isfinite(vertices).all(axis=1))[0])
         raise ValueError(f"{where}: vertex {bad} has a non-finite coordinate (NaN or inf)")
 
+    return vertices, check_faces(faces, len(vertices), where)
+
+
+def check_faces(faces, n_vertices: int, where: str = "mesh") -> np.ndarray:
+    """``faces`` as a C-contiguous int64 ``(m, 3)`` array of indices below ``n_vertices``.
+
+    Integral floats are accepted. The compiled loops of the Laplacians do not check
+    bounds, so every path to them comes through here: a bad index is a ``ValueError``,
+    never a read out of bounds.
+    """
+    faces = np.asarray(faces)
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise ValueError(
+            f"{where}: faces must be an array of shape (n_faces, 3), got shape {faces.shape}"
+        )
     if faces.dtype.kind == "f":
         if not np.isfinite(faces).all() or not (faces == np.round(faces)).all():
             raise ValueError(f"{where}: face indices must be integers")
     elif faces.dtype.kind not in "iu":
         raise ValueError(f"{where}: face indices must be integers, got dtype {faces.dtype}")
-    lo, hi = faces.min(), faces.max()
-    if lo < 0 or hi >= len(vertices):
-        bad = int(np.flatnonzero(((faces < 0) | (faces >= len(vertices))).any(axis=1))[0])
+    if len(faces) and (faces.min() < 0 or faces.max() >= n_vertices):
+        bad = int(np.flatnonzero(((faces < 0) | (faces >= n_vertices)).any(axis=1))[0])
         raise ValueError(
             f"{where}: face {bad} has index {faces[bad].tolist()} out of range for "
-            f"{len(vertices)} vertices"
+            f"{n_vertices} vertices"
         )
-    return vertices, faces.astype(np.int64, copy=False)
+    return np.ascontiguousarray(faces, dtype=np.int64)
 
 
 @dataclass(frozen=True, eq=False)

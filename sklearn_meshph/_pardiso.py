@@ -123,10 +123,8 @@ class PardisoCholesky:
         # No iterative refinement: PARDISO's default of two steps triples the cost of a
         # solve, and a Cholesky factor of a positive definite matrix is backward stable.
         self._iparm[7] = 0
-        self._factored = False
         unused = np.zeros(self.n)
         self._call(12, 1, unused, unused)  # analysis and numerical factorization
-        self._factored = True
 
     def _call(self, phase: int, nrhs: int, b: np.ndarray, x: np.ndarray) -> None:
         scalars = self._scalars
@@ -174,8 +172,9 @@ class PardisoCholesky:
         return X
 
     def _release(self) -> None:
-        if getattr(self, "_factored", False) or np.any(getattr(self, "_handle", [0])):
-            self._factored = False
+        # PARDISO's handle is all zeros until it holds memory (and after a release).
+        handle = getattr(self, "_handle", None)
+        if handle is not None and handle.any():
             unused = np.zeros(self.n)
             try:
                 self._call(-1, 1, unused, unused)

@@ -24,8 +24,8 @@ import scipy.linalg
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
-from ._assembly import check_faces, cotangent_weights, edge_matrix_csr
-from ._mesh import check_mesh, clean_mesh
+from ._assembly import cotangent_weights, edge_matrix_csr
+from ._mesh import check_faces, check_mesh, clean_mesh
 from ._ordering import geometric_nested_dissection
 from ._pardiso import PardisoCholesky, pardiso_available
 

@@ -25,9 +25,12 @@ from sklearn_meshph import (
 )
 
 
-def pipeline(**eigen_params):
+def pipeline(*final_steps, **eigen_params):
     return make_pipeline(
-        LaplacianEigenTransformer(**eigen_params), LowerStarPersistence(), DiagramDistance()
+        LaplacianEigenTransformer(**eigen_params),
+        LowerStarPersistence(),
+        DiagramDistance(),
+        *final_steps,
     )
 
 
@@ -191,12 +194,8 @@ def test_random_meshes_through_the_whole_pipeline(meshes, filtration, metric):
 
 def test_a_fitted_pipeline_predicts_identically_in_another_process(tmp_path):
     meshes, y = make_shapes(n_per_class=3, random_state=1, return_X_y=True)
-    model = make_pipeline(
-        LaplacianEigenTransformer(),
-        LowerStarPersistence(),
-        DiagramDistance(),
-        KNeighborsClassifier(n_neighbors=1, metric="precomputed"),
-    ).fit(meshes[::2], y[::2])
+    model = pipeline(KNeighborsClassifier(n_neighbors=1, metric="precomputed"))
+    model.fit(meshes[::2], y[::2])
     expected = model.predict_proba(meshes[1::2])
     (tmp_path / "model.pkl").write_bytes(pickle.dumps(model))
     (tmp_path / "meshes.pkl").write_bytes(pickle.dumps(meshes[1::2]))
