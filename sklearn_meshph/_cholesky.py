@@ -24,11 +24,13 @@ against the reference BLAS (the cholespy wheels): at 41k vertices about 1.5 time
 from __future__ import annotations
 
 import ctypes
+import functools
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 from numba.extending import get_cython_function_address
+from threadpoolctl import ThreadpoolController
 
 __all__ = ["SupernodalCholesky"]
 
@@ -53,6 +55,20 @@ _dtpsv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P)(
 _dgemv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P)(
     get_cython_function_address("scipy.linalg.cython_blas", "dgemv")
 )
+
+
+@functools.cache
+def _controller() -> ThreadpoolController:
+    return ThreadpoolController()
+
+
+def _one_blas_thread():
+    """Context limiting BLAS to one thread (about 30 us with a cached controller).
+
+    Thousands of small BLAS calls: a threaded BLAS made the factorization 20 times
+    slower on a 2-core machine, and its results depend on the thread count.
+    """
+    return _controller().limit(limits=1, user_api="blas")
 
 
 @numba.njit(cache=True)
@@ -487,18 +503,19 @@ class SupernodalCholesky:
         self.rowptr, self.rowind, child_ptr, child = _symbolic_rows(
             n, indptr, indices, self.first, sparent
         )
-        self.lptr, self.lx, info = _numeric(
-            n,
-            indptr,
-            indices,
-            B.data,
-            self.first,
-            self.rowptr,
-            self.rowind,
-            child_ptr,
-            child,
-            (_dpotrf, _dtrsm, _dsyrk),
-        )
+        with _one_blas_thread():
+            self.lptr, self.lx, info = _numeric(
+                n,
+                indptr,
+                indices,
+                B.data,
+                self.first,
+                self.rowptr,
+                self.rowind,
+                child_ptr,
+                child,
+                (_dpotrf, _dtrsm, _dsyrk),
+            )
         if info:
             raise ValueError(
                 f"the matrix is not positive definite (zero or negative pivot at column "
@@ -517,16 +534,17 @@ class SupernodalCholesky:
         if b.shape != (self.shape[0],):
             raise ValueError(f"right-hand side must have shape ({self.shape[0]},), got {b.shape}")
         x = b[self.perm]
-        _solve(
-            x,
-            self.first,
-            self.rowptr,
-            self.rowind,
-            self.lptr,
-            self.lx,
-            np.empty(len(x)),
-            (_dtpsv, _dgemv),
-        )
+        with _one_blas_thread():
+            _solve(
+                x,
+                self.first,
+                self.rowptr,
+                self.rowind,
+                self.lptr,
+                self.lx,
+                np.empty(len(x)),
+                (_dtpsv, _dgemv),
+            )
         out = np.empty_like(x)
         out[self.perm] = x
         return out

@@ -48,7 +48,7 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eig
     n_eigs = min(n_eigs, len(clean.vertices))
     try:
         values, vectors = generalized_eigenpairs(L, M, n_eigs, seed=seed, points=clean.vertices)
-    except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, SuperLU, PARDISO
+    except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, the factorization
         raise ValueError(
             f"{_where(index)}: the eigensolver failed on the cleaned mesh "
             f"({len(clean.vertices)} vertices, {len(clean.faces)} faces): {error}"

@@ -11,10 +11,9 @@ Two discretizations:
   with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
 
 Eigenpairs come from shift-invert Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`)
-with a small negative shift and one sparse factorization of ``L - sigma M``: MKL
-PARDISO's Cholesky when an MKL runtime is installed, else CHOLMOD's Cholesky through
-cholespy, else SuperLU on a geometric nested-dissection order of the vertices (fast to
-compute, near-linear fill).
+with a small negative shift and one sparse factorization of ``L - sigma M``: our
+supernodal Cholesky (:mod:`._cholesky`) on a geometric nested-dissection order of the
+vertices (fast to compute, near-linear fill).
 """
 
 from __future__ import annotations
@@ -25,9 +24,9 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
 from ._assembly import cotangent_weights, edge_matrix_csr
+from ._cholesky import SupernodalCholesky
 from ._mesh import check_faces, check_mesh, clean_mesh
 from ._ordering import geometric_nested_dissection
-from ._pardiso import PardisoCholesky, pardiso_available
 
 __all__ = ["cotangent_laplacian", "graph_laplacian", "laplacian_eigenfunctions"]
 
@@ -122,65 +121,36 @@ def build_laplacian(vertices, faces, laplacian: str):
     raise ValueError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
 
 
-def _cholesky(A: sp.spmatrix):
-    """CHOLMOD's sparse Cholesky factor of ``A`` (None when cholespy is unavailable)."""
-    try:
-        from cholespy import CholeskySolverD, MatrixType
-    except ImportError:
-        return None
-    A = sp.csc_matrix(A)
-    return CholeskySolverD(
-        A.shape[0],
-        A.indptr.astype(np.int32),
-        A.indices.astype(np.int32),
-        np.ascontiguousarray(A.data, dtype=np.float64),
-        MatrixType.CSC,
-    )
-
-
-# Without MKL, "auto" takes CHOLMOD's Cholesky factor (when cholespy is installed): half the
-# memory of SuperLU's L and U (at 655k vertices the process peaks at 1.3 GB instead of
-# 2.5 GB), and solves twice as fast, which makes up for a slower factorization. Measured
-# (factorization and 8 / 11 eigenpairs, best of 4 alternations): 0.024 / 0.031 s against
-# LU's 0.028 / 0.041 s at 2.5k vertices, 0.52 / 0.56 s against 0.66 / 0.59 s at 41k, and
-# 4.07 / 4.68 s against 3.97 / 4.42 s at 164k.
-
-
 class ShiftInvertOperator(LinearOperator):
     """``x -> A^{-1} x`` for a symmetric positive definite ``A = L - sigma M``.
 
-    ``method="pardiso"`` factors ``A`` with Intel MKL PARDISO's supernodal Cholesky
-    (METIS order), when an MKL runtime is installed (the ``mkl`` extra): the fastest, two
-    to three times in the factorization and five times per solve at 41k vertices.
-    ``method="lu"`` uses SuperLU with diagonal pivots (stable for a positive definite
-    matrix) on a geometric nested-dissection order of ``points``, or on SuperLU's
-    COLAMD order without points (about 1.5 times the fill). ``method="cholesky"`` factors
-    ``A`` with CHOLMOD (cholespy; its own fill-reducing order): half the memory of the LU
-    factor and solves twice as fast, but a slower factorization (reference BLAS).
-    ``"auto"`` takes PARDISO when MKL is found, else the Cholesky factor (cholespy), else
-    the LU factor.
+    ``method="cholesky"`` (and ``"auto"``) factors ``A`` with our supernodal multifrontal
+    Cholesky (:class:`._cholesky.SupernodalCholesky`, dense kernels on scipy's BLAS) on a
+    geometric nested-dissection order of ``points``, or on reverse Cuthill-McKee without
+    points (more fill). ``method="lu"`` uses SuperLU with diagonal pivots (stable for a
+    positive definite matrix) on the same nested-dissection order, or on SuperLU's COLAMD
+    order without points: about twice the memory and the time, kept as an independent
+    check.
     """
 
     def __init__(self, A: sp.spmatrix, points: np.ndarray | None = None, method: str = "auto"):
         A = sp.csr_matrix(A)
         super().__init__(dtype=np.float64, shape=A.shape)
-        if method not in ("auto", "cholesky", "lu", "pardiso"):
-            raise ValueError(
-                f"method must be 'auto', 'cholesky', 'lu' or 'pardiso', got {method!r}"
+        if method not in ("auto", "cholesky", "lu"):
+            raise ValueError(f"method must be 'auto', 'cholesky' or 'lu', got {method!r}")
+        self.method = "lu" if method == "lu" else "cholesky"
+        self.perm = None
+        if points is not None:
+            graph = A.copy()
+            graph.setdiag(0)
+            graph.eliminate_zeros()
+            self.perm = geometric_nested_dissection(
+                np.ascontiguousarray(points, dtype=np.float64), graph.indptr, graph.indices
             )
-        if method == "pardiso" or (method == "auto" and pardiso_available()):
-            self.method = "pardiso"
-            self.pardiso = PardisoCholesky(A)
+        if self.method == "cholesky":
+            self.cholesky = SupernodalCholesky(A, self.perm)
             return
-        self.cholesky = _cholesky(A) if method in ("auto", "cholesky") else None
-        if self.cholesky is not None:
-            self.method = "cholesky"
-            return
-        if method == "cholesky":
-            raise ImportError("method='cholesky' needs cholespy (pip install cholespy)")
-        self.method = "lu"
-        if points is None:
-            self.perm = None
+        if self.perm is None:
             self.lu = splu(
                 A.tocsc(),
                 permc_spec="COLAMD",
@@ -188,12 +158,6 @@ class ShiftInvertOperator(LinearOperator):
                 options={"SymmetricMode": True},
             )
             return
-        graph = A.copy()
-        graph.setdiag(0)
-        graph.eliminate_zeros()
-        self.perm = geometric_nested_dissection(
-            np.ascontiguousarray(points, dtype=np.float64), graph.indptr, graph.indices
-        )
         self.iperm = np.empty_like(self.perm)
         self.iperm[self.perm] = np.arange(len(self.perm))
         self.lu = splu(
@@ -205,12 +169,8 @@ class ShiftInvertOperator(LinearOperator):
 
     def _matvec(self, x):
         x = np.asarray(x, dtype=np.float64).ravel()
-        if self.method == "pardiso":
-            return self.pardiso.solve(x)
         if self.method == "cholesky":
-            out = np.empty_like(x)
-            self.cholesky.solve(np.ascontiguousarray(x), out)
-            return out
+            return self.cholesky.solve(x)
         if self.perm is None:
             return self.lu.solve(x)
         return self.lu.solve(x[self.perm])[self.iperm]

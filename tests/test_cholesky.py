@@ -124,3 +124,19 @@ def test_any_sparse_spd_matrix_and_order(n, density, seed):
     B = A.toarray()[perm][:, perm]
     np.testing.assert_allclose(L @ L.T, B, atol=1e-12 * np.abs(B).max())
     assert np.allclose(np.triu(L, 1), 0.0)
+
+
+def test_independent_of_the_blas_thread_setting():
+    """BLAS runs on one thread inside the factorization whatever the caller's setting."""
+    from threadpoolctl import threadpool_limits
+
+    A, perm = mesh_matrix(4)
+    b = np.random.default_rng(2).normal(size=A.shape[0])
+    with threadpool_limits(limits=1, user_api="blas"):
+        one = SupernodalCholesky(A, perm)
+        x_one = one.solve(b)
+    with threadpool_limits(limits=2, user_api="blas"):
+        two = SupernodalCholesky(A, perm)
+        x_two = two.solve(b)
+    assert np.array_equal(one.lx, two.lx)
+    assert np.array_equal(x_one, x_two)

@@ -1,7 +1,5 @@
 """Laplacian matrices and eigenpairs against analytic results and independent solvers."""
 
-import os
-
 import numpy as np
 import pytest
 import scipy.linalg
@@ -10,7 +8,6 @@ from scipy.sparse.linalg import splu
 
 from sklearn_meshph import cotangent_laplacian, graph_laplacian, laplacian_eigenfunctions
 from sklearn_meshph._ordering import geometric_nested_dissection
-from sklearn_meshph._pardiso import PardisoCholesky, pardiso_available
 from sklearn_meshph.laplacian import ShiftInvertOperator, generalized_eigenpairs
 
 
@@ -64,7 +61,9 @@ def test_eigenvalues_match_lapy_to_1e8():
 
 
 @pytest.mark.parametrize("laplacian", ["cotangent", "graph"])
-@pytest.mark.parametrize("method", ["pardiso", "cholesky", "lu", "lu without points"])
+@pytest.mark.parametrize(
+    "method", ["cholesky", "cholesky without points", "lu", "lu without points"]
+)
 def test_sparse_solver_matches_dense_eigh(laplacian, method):
     vertices, faces = irregular_mesh(3)  # 642 vertices: the ARPACK path
     L, M = (
@@ -72,12 +71,8 @@ def test_sparse_solver_matches_dense_eigh(laplacian, method):
         if laplacian == "cotangent"
         else graph_laplacian(faces, len(vertices))
     )
-    if method == "cholesky":
-        pytest.importorskip("cholespy")
-    if method == "pardiso" and not pardiso_available():
-        pytest.skip("no MKL runtime")
-    points = None if method == "lu without points" else vertices
-    method = "lu" if method == "lu without points" else method
+    points = None if method.endswith("without points") else vertices
+    method = method.split()[0]
     values, vectors = generalized_eigenpairs(L, M, 10, points=points, method=method)
     ref_values, ref_vectors = scipy.linalg.eigh(L.toarray(), M.toarray())
     scale = ref_values[9]
@@ -173,7 +168,6 @@ def test_geometric_nested_dissection_is_a_fill_reducing_permutation():
 
 
 def test_cholesky_and_lu_agree_and_indefinite_matrices_are_refused():
-    pytest.importorskip("cholespy")
     vertices, faces = irregular_mesh(4)
     L, M = cotangent_laplacian(vertices, faces)
     x = np.random.default_rng(1).random(len(vertices))
@@ -186,60 +180,6 @@ def test_cholesky_and_lu_agree_and_indefinite_matrices_are_refused():
         ShiftInvertOperator(L - 10.0 * M, method="cholesky")
     with pytest.raises(ValueError, match="method must be"):
         ShiftInvertOperator(A, method="qr")
-
-
-@pytest.mark.skipif(not pardiso_available(), reason="no MKL runtime")
-def test_pardiso_agrees_with_lu_refuses_indefinite_and_is_single_threaded():
-    from threadpoolctl import threadpool_limits
-
-    vertices, faces = irregular_mesh(4)
-    L, M = cotangent_laplacian(vertices, faces)
-    A = L + 1e-2 * M
-    rng = np.random.default_rng(2)
-    x = rng.random(len(vertices))
-    by_pardiso = ShiftInvertOperator(A, points=vertices, method="pardiso")
-    by_lu = ShiftInvertOperator(A, points=vertices, method="lu")
-    assert by_pardiso.method == "pardiso"
-    np.testing.assert_allclose(by_pardiso.matvec(x), by_lu.matvec(x), rtol=1e-9)
-    block = rng.random((len(vertices), 3))
-    np.testing.assert_allclose(by_pardiso.matmat(block), by_lu.matmat(block), rtol=1e-9)
-    with pytest.raises(ValueError, match="not positive definite"):
-        ShiftInvertOperator(L - 10.0 * M, method="pardiso")
-    with pytest.raises(ValueError, match="expected 2562"):
-        by_pardiso.pardiso.solve(np.ones(3))
-    # The factorization runs on one MKL thread whatever the global setting, so it is
-    # bitwise the same with MKL allowed two threads. (Without that rule the bitwise test
-    # above fails: laplacian_eigenfunctions does not limit threads itself.)
-    with threadpool_limits(limits=1, user_api="blas"):
-        one = PardisoCholesky(A).solve(x)
-    with threadpool_limits(limits=2, user_api="blas"):
-        two = PardisoCholesky(A).solve(x)
-    np.testing.assert_array_equal(one, two)
-
-
-@pytest.mark.skipif(not pardiso_available(), reason="no MKL runtime")
-def test_without_mkl_the_same_eigenpairs_come_from_superlu(tmp_path):
-    """SKLEARN_MESHPH_NO_MKL=1 switches to SuperLU; the answer is the same."""
-    import subprocess
-    import sys
-
-    vertices, faces = irregular_mesh(4)
-    np.savez(tmp_path / "mesh.npz", vertices=vertices, faces=faces)
-    script = (
-        "import sys, numpy as np\n"
-        "from sklearn_meshph import laplacian_eigenfunctions\n"
-        "from sklearn_meshph._pardiso import pardiso_available\n"
-        "assert not pardiso_available()\n"
-        f"data = np.load({str(tmp_path / 'mesh.npz')!r})\n"
-        "values, vectors = laplacian_eigenfunctions((data['vertices'], data['faces']), 6)\n"
-        f"np.savez({str(tmp_path / 'out.npz')!r}, values=values, vectors=vectors)\n"
-    )
-    env = {**os.environ, "SKLEARN_MESHPH_NO_MKL": "1"}
-    subprocess.run([sys.executable, "-c", script], check=True, env=env)
-    without = np.load(tmp_path / "out.npz")
-    values, vectors = laplacian_eigenfunctions((vertices, faces), 6)
-    np.testing.assert_allclose(without["values"], values, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(without["vectors"][:, 1:], vectors[:, 1:], atol=1e-7)
 
 
 def test_compiled_assembly_matches_a_dense_loop_and_is_canonical():
