@@ -6,13 +6,10 @@ Irregular meshes: icospheres of 2.5k to 655k vertices scaled to an ellipsoid (1,
 2.1) with vertices jittered by 10% of the edge length. Each (method, size) runs in a
 fresh subprocess with BLAS limited to one thread; time is the median of repeats in the
 best of two round-robin rounds over all methods, peak memory the growth of the resident
-set over the loaded mesh. "floor" is one sparse
-factorization of L - sigma M as ours does it, fill-reducing ordering included: MKL
-PARDISO's Cholesky when an MKL runtime is installed (the bench extra installs one), and
-in the "no-MKL" columns (SKLEARN_MESHPH_NO_MKL=1, the default install's path) CHOLMOD's
-Cholesky through cholespy. The last table times the
-eigen stage over a dataset (the Sumner meshes, or 20 ellipsoids of 41k vertices) on one
-and on two joblib workers.
+set over the loaded mesh. "floor" is the assembly of L and M and one sparse Cholesky
+factorization of L - sigma M as ours does it, fill-reducing ordering included. The last
+table times the eigen stage over a dataset (the Sumner meshes, or 20 ellipsoids of 41k
+vertices) on one and on two joblib workers.
 """
 
 from __future__ import annotations
@@ -93,10 +90,8 @@ print(json.dumps({"time": time.perf_counter() - start, "meshes": len(meshes)}))
 """
 
 
-def run(code, *args, no_mkl=False):
+def run(code, *args):
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    if no_mkl:
-        env["SKLEARN_MESHPH_NO_MKL"] = "1"
     out = subprocess.run(
         [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True, env=env
     )
@@ -114,51 +109,36 @@ def main():
     parser.add_argument("--dataset-only", action="store_true", help="only the last table")
     args = parser.parse_args()
     sizes = () if args.dataset_only else (4, 5, 6) if args.quick else (4, 5, 6, 7, 8)
-    # (column, CASE method, without MKL): "no-MKL" is the default install's solver path.
-    methods = (
-        ("ours", "ours", False),
-        ("ours no-MKL", "ours", True),
-        ("transformer", "transformer", False),
-        ("floor", "floor", False),
-        ("floor no-MKL", "floor", True),
-        ("lapy", "lapy", False),
-        ("robust-laplacian", "robust-laplacian", False),
-    )
-    from sklearn_meshph._pardiso import pardiso_available
-
+    methods = ("ours", "transformer", "floor", "lapy", "robust-laplacian")
     print(
         f"k = {args.k} eigenpairs ('transformer': eigen_index=1, 8 eigenpairs); "
-        f"times in s, peak memory in MB; MKL PARDISO found: {pardiso_available()}"
+        "times in s, peak memory in MB"
     )
-    ratios = (
-        "ours/lapy | no-MKL/lapy | ours/robust | ours/floor | no-MKL/floor no-MKL"
-        " | transformer/floor | peak MB ours/no-MKL/lapy"
-    )
-    print("| vertices | " + " | ".join(f"{m[0]} s" for m in methods) + f" | {ratios} |")
-    print("|---|" + "---|" * (len(methods) + 7))
+    ratios = "ours/lapy | ours/robust | ours/floor | transformer/floor | peak MB ours/lapy"
+    print("| vertices | " + " | ".join(f"{m} s" for m in methods) + f" | {ratios} |")
+    print("|---|" + "---|" * (len(methods) + 5))
     for sub in sizes:
         repeats = 3 if sub <= 6 else 1
         results = {}
         # Rounds over all methods, the best round kept per method: the machine's speed
         # drifts by up to 1.5x over minutes, and a round-robin exposes every method to it.
         for _ in range(args.rounds):
-            for column, method, no_mkl in methods:
+            for method in methods:
                 if method in ("lapy", "robust-laplacian") and sub > args.skip_anchors_above:
-                    results[column] = {"time": float("nan"), "peak_mb": float("nan")}
+                    results[method] = {"time": float("nan"), "peak_mb": float("nan")}
                     continue
-                result = run(CASE, method, sub, args.k, repeats, no_mkl=no_mkl)
-                if column not in results or result["time"] < results[column]["time"]:
-                    results[column] = result
+                result = run(CASE, method, sub, args.k, repeats)
+                if method not in results or result["time"] < results[method]["time"]:
+                    results[method] = result
         t = {m: r["time"] for m, r in results.items()}
         peak = {m: r["peak_mb"] for m, r in results.items()}
         n = results["ours"].get("n", 0)
         print(
             f"| {n:,} | "
-            + " | ".join(f"{t[m[0]]:.3f}" for m in methods)
-            + f" | {t['ours'] / t['lapy']:.2f} | {t['ours no-MKL'] / t['lapy']:.2f}"
-            f" | {t['ours'] / t['robust-laplacian']:.2f} | {t['ours'] / t['floor']:.2f}"
-            f" | {t['ours no-MKL'] / t['floor no-MKL']:.2f} | {t['transformer'] / t['floor']:.2f}"
-            f" | {peak['ours']:.0f}/{peak['ours no-MKL']:.0f}/{peak['lapy']:.0f} |",
+            + " | ".join(f"{t[m]:.3f}" for m in methods)
+            + f" | {t['ours'] / t['lapy']:.2f} | {t['ours'] / t['robust-laplacian']:.2f}"
+            f" | {t['ours'] / t['floor']:.2f} | {t['transformer'] / t['floor']:.2f}"
+            f" | {peak['ours']:.0f}/{peak['lapy']:.0f} |",
             flush=True,
         )
     data = Path(os.environ.get("SKLEARN_MESHPH_DATA", "../shared/data")) / "sumner"

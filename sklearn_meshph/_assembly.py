@@ -143,3 +143,80 @@ def edge_matrix_csr(n, faces, weights, laplacian):
             data[diagonal_at] = -total
         indptr[r + 1] = pos
     return data[:pos], indices[:pos], indptr  # scipy's (data, indices, indptr) order
+
+
+@numba.njit(cache=True)
+def first_of_duplicate_faces(faces):
+    """Mask keeping the first face of every group listing the same three vertices.
+
+    An open-addressing hash table of the sorted index triples: one pass, no sort.
+    """
+    m = faces.shape[0]
+    size = 1
+    while size < 2 * m:
+        size *= 2
+    table = np.full(size, -1, np.int64)
+    keep = np.ones(m, dtype=np.bool_)
+    for f in range(m):
+        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+        if a > b:
+            a, b = b, a
+        if b > c:
+            b, c = c, b
+        if a > b:
+            a, b = b, a
+        h = (a * 0x9E3779B1 + b * 0x85EBCA77 + c * 0xC2B2AE3D) & (size - 1)
+        while True:
+            g = table[h]
+            if g == -1:
+                table[h] = f
+                break
+            x, y, z = faces[g, 0], faces[g, 1], faces[g, 2]
+            if x > y:
+                x, y = y, x
+            if y > z:
+                y, z = z, y
+            if x > y:
+                x, y = y, x
+            if x == a and y == b and z == c:
+                keep[f] = False
+                break
+            h = (h + 1) & (size - 1)
+    return keep
+
+
+@numba.njit(cache=True)
+def _root(parent, v):
+    while parent[v] != v:
+        parent[v] = parent[parent[v]]  # path halving
+        v = parent[v]
+    return v
+
+
+@numba.njit(cache=True)
+def vertex_components(n, faces):
+    """Connected components of the vertices through shared faces (union-find).
+
+    Returns ``(n_components, labels)``: labels number the components in the order of
+    their lowest vertex; a vertex in no face is a component of its own.
+    """
+    parent = np.arange(n)
+    for f in range(faces.shape[0]):
+        for k in (1, 2):
+            ra = _root(parent, faces[f, 0])
+            rb = _root(parent, faces[f, k])
+            if ra != rb:
+                if ra < rb:
+                    parent[rb] = ra
+                else:
+                    parent[ra] = rb
+    labels = np.empty(n, np.int64)
+    count = 0
+    for v in range(n):
+        r = _root(parent, v)
+        if r == v:  # roots are their component's lowest vertex
+            labels[v] = count
+            count += 1
+        else:
+            labels[v] = labels[r]
+    return count, labels

@@ -12,9 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
-from ._assembly import edge_matrix_csr, nondegenerate_faces
+from ._assembly import (
+    edge_matrix_csr,
+    first_of_duplicate_faces,
+    nondegenerate_faces,
+    vertex_components,
+)
 
 __all__ = ["CleanMesh", "check_mesh", "clean_mesh", "mesh_edges"]
 
@@ -164,18 +168,6 @@ def _nondegenerate(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     )
 
 
-def _first_of_duplicates(faces: np.ndarray) -> np.ndarray:
-    """Mask keeping the first face of every group with the same three vertices."""
-    key = np.sort(faces, axis=1)
-    order = np.lexsort(key.T[::-1])
-    key = key[order]
-    repeated = np.zeros(len(faces), dtype=bool)
-    repeated[1:] = (key[1:] == key[:-1]).all(axis=1)
-    keep = np.ones(len(faces), dtype=bool)
-    keep[order[repeated]] = False
-    return keep
-
-
 def mesh_edges(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:
     """Symmetric vertex adjacency (CSR, data 1) of the edges of ``faces``.
 
@@ -234,11 +226,11 @@ def clean_mesh(
     faces = faces[keep]
     if len(faces) == 0:
         raise ValueError(f"{where}: every face is degenerate (zero area); nothing is left")
-    faces = faces[_first_of_duplicates(faces)]
+    faces = faces[first_of_duplicate_faces(faces)]
 
     used = np.zeros(len(vertices), dtype=bool)
     used[faces.ravel()] = True
-    n_comp, labels = connected_components(mesh_edges(faces, len(vertices)), directed=False)
+    n_comp, labels = vertex_components(len(vertices), faces)
     if n_comp - np.count_nonzero(~used) > 1:
         face_labels = labels[faces[:, 0]]
         n_real = len(np.unique(face_labels))

@@ -121,3 +121,32 @@ def test_all_degenerate_faces_raise():
     vertices = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
     with pytest.raises(ValueError, match="sample 0: every face is degenerate"):
         clean_mesh(vertices, np.array([[0, 1, 2]]), index=0)
+
+
+def test_compiled_duplicates_and_components_match_references():
+    """The hash table and the union-find against a set of sorted triples and SciPy."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    from sklearn_meshph._assembly import first_of_duplicate_faces, vertex_components
+
+    rng = np.random.default_rng(0)
+    n = 300
+    faces = rng.integers(0, n, size=(500, 3))
+    # Repeat a fifth of the faces with their indices in another order.
+    repeats = faces[rng.integers(0, len(faces), 100)]
+    faces = np.vstack([faces, np.array([rng.permutation(f) for f in repeats])])
+    seen, expected = set(), []
+    for face in faces:
+        key = tuple(sorted(face))
+        expected.append(key not in seen)
+        seen.add(key)
+    np.testing.assert_array_equal(first_of_duplicate_faces(faces), expected)
+
+    faces = faces[:120]  # sparse enough for several components and lone vertices
+    count, labels = vertex_components(n, faces)
+    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]]])
+    graph = sp.coo_matrix((np.ones(len(edges)), edges.T), shape=(n, n))
+    ref_count, ref_labels = connected_components(graph, directed=False)
+    assert count == ref_count
+    np.testing.assert_array_equal(labels, ref_labels)  # both numbered by lowest vertex
