@@ -234,7 +234,8 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
 
     Panel ``s`` holds the supernode's columns of ``L``: its lower triangular diagonal
     block packed by rows (entry ``(c, d)``, ``d <= c``, at ``c (c + 1) / 2 + d``), then the
-    ``(nr - nc, nc)`` block below it in C order. ``info`` is 0, or 1 + the
+    ``(m, nc)`` block below it by columns (entry ``(t, c)`` at ``c m + t``, ``m = nr - nc``):
+    the solves' inner loops then run along the long columns. ``info`` is 0, or 1 + the
     column where the matrix was found not positive definite. ``lapack`` holds the ctypes
     functions ``(dpotrf, dtrsm, dsyrk)``: passed as an argument rather than read as
     globals, so that numba can cache the compiled function.
@@ -331,8 +332,8 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
             for d in range(c + 1):
                 lx[k] = front[c, d]
                 k += 1
-        for t in range(nc, nr):
-            for c in range(nc):
+        for c in range(nc):
+            for t in range(nc, nr):
                 lx[k] = front[t, c]
                 k += 1
     return lptr, lx, 0
@@ -343,13 +344,15 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
 _BLAS_SOLVE_COLUMNS = 8
 
 
-@numba.njit(cache=True)
+# Reassociation lets the compiler vectorize the dot products (a fixed order for a given
+# machine and build: results stay reproducible).
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
     """Overwrite ``x`` (permuted) with ``(L L^T)^{-1} x``; ``work`` has length >= n.
 
-    ``blas`` holds the ctypes functions ``(dtpsv, dgemv)``. In Fortran's view a packed
-    lower triangle by rows is an upper triangle ``U = L^T`` packed by columns, and the
-    C-ordered block below it is ``L21^T`` with leading dimension ``nc``.
+    ``blas`` holds the ctypes functions ``(dtpsv, dgemv)``. In Fortran's view a lower
+    triangle packed by rows is the upper triangle ``U = L11^T`` packed by columns, and the
+    block below, stored by columns, is ``L21`` with leading dimension ``m``.
     """
     dtpsv, dgemv = blas
     chars = np.array([ord("U"), ord("T"), ord("N")], np.uint8)
@@ -359,14 +362,15 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
     for s in range(ns):  # forward: L y = x
         f = first[s]
         nc = first[s + 1] - f
-        r0 = rowptr[s]
-        m = rowptr[s + 1] - r0 - nc
+        r0 = rowptr[s] + nc  # rows of L21
+        m = rowptr[s + 1] - r0
         base = lptr[s]
-        below = base + nc * (nc + 1) // 2  # entry (t, c) of L21 at below + t * nc + c
-        if nc >= _BLAS_SOLVE_COLUMNS:
-            ints[0] = nc
-            ints[1] = m
-            xs = x[f:]
+        below = base + nc * (nc + 1) // 2
+        use_blas = nc >= _BLAS_SOLVE_COLUMNS
+        ints[0] = nc
+        ints[1] = m
+        xs = x[f:]
+        if use_blas:  # y = U^{-T} x_J
             dtpsv(
                 chars[0:].ctypes,
                 chars[1:].ctypes,
@@ -376,64 +380,74 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
                 xs.ctypes,
                 ints[2:].ctypes,
             )
-            if m > 0:
-                # work = L21 y: Fortran's (L21^T)^T y.
-                dgemv(
-                    chars[1:].ctypes,
-                    ints[0:].ctypes,
-                    ints[1:].ctypes,
-                    scalars[0:].ctypes,
-                    lx[below:].ctypes,
-                    ints[0:].ctypes,
-                    xs.ctypes,
-                    ints[2:].ctypes,
-                    scalars[1:].ctypes,
-                    work.ctypes,
-                    ints[2:].ctypes,
-                )
-                for t in range(m):
-                    x[rowind[r0 + nc + t]] -= work[t]
-            continue
-        for c in range(nc):
-            value = x[f + c]
-            row = base + c * (c + 1) // 2
-            for d in range(c):
-                value -= lx[row + d] * x[f + d]
-            x[f + c] = value / lx[row + c]
-        for t in range(m):
-            row = below + t * nc
-            value = 0.0
+        else:
             for c in range(nc):
-                value += lx[row + c] * x[f + c]
-            x[rowind[r0 + nc + t]] -= value
+                value = x[f + c]
+                row = base + c * (c + 1) // 2
+                for d in range(c):
+                    value -= lx[row + d] * x[f + d]
+                x[f + c] = value / lx[row + c]
+        if m == 0:
+            continue
+        if use_blas:  # work = L21 y
+            dgemv(
+                chars[2:].ctypes,
+                ints[1:].ctypes,
+                ints[0:].ctypes,
+                scalars[0:].ctypes,
+                lx[below:].ctypes,
+                ints[1:].ctypes,
+                xs.ctypes,
+                ints[2:].ctypes,
+                scalars[1:].ctypes,
+                work.ctypes,
+                ints[2:].ctypes,
+            )
+        else:
+            work[:m] = 0.0
+            for c in range(nc):
+                yc = x[f + c]
+                col = below + c * m
+                for t in range(m):
+                    work[t] += lx[col + t] * yc
+        for t in range(m):
+            x[rowind[r0 + t]] -= work[t]
     for s in range(ns - 1, -1, -1):  # backward: L^T x = y
         f = first[s]
         nc = first[s + 1] - f
-        r0 = rowptr[s]
-        m = rowptr[s + 1] - r0 - nc
+        r0 = rowptr[s] + nc
+        m = rowptr[s + 1] - r0
         base = lptr[s]
         below = base + nc * (nc + 1) // 2
-        if nc >= _BLAS_SOLVE_COLUMNS:
-            ints[0] = nc
-            ints[1] = m
-            xs = x[f:]
-            if m > 0:
-                for t in range(m):
-                    work[t] = x[rowind[r0 + nc + t]]
-                # x_J -= L21^T work: Fortran's L21^T times work.
+        use_blas = nc >= _BLAS_SOLVE_COLUMNS
+        ints[0] = nc
+        ints[1] = m
+        xs = x[f:]
+        if m > 0:
+            for t in range(m):
+                work[t] = x[rowind[r0 + t]]
+            if use_blas:  # x_J -= L21^T work
                 dgemv(
-                    chars[2:].ctypes,
-                    ints[0:].ctypes,
+                    chars[1:].ctypes,
                     ints[1:].ctypes,
+                    ints[0:].ctypes,
                     scalars[2:].ctypes,
                     lx[below:].ctypes,
-                    ints[0:].ctypes,
+                    ints[1:].ctypes,
                     work.ctypes,
                     ints[2:].ctypes,
                     scalars[0:].ctypes,
                     xs.ctypes,
                     ints[2:].ctypes,
                 )
+            else:
+                for c in range(nc):
+                    col = below + c * m
+                    value = 0.0
+                    for t in range(m):
+                        value += lx[col + t] * work[t]
+                    x[f + c] -= value
+        if use_blas:  # x_J = U^{-1} x_J
             dtpsv(
                 chars[0:].ctypes,
                 chars[2:].ctypes,
@@ -443,18 +457,13 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
                 xs.ctypes,
                 ints[2:].ctypes,
             )
-            continue
-        for c in range(nc):
-            value = x[f + c]
-            for t in range(m):
-                value -= lx[below + t * nc + c] * x[rowind[r0 + nc + t]]
-            x[f + c] = value
-        for c in range(nc - 1, -1, -1):  # by rows of L: contiguous in the packed triangle
-            row = base + c * (c + 1) // 2
-            value = x[f + c] / lx[row + c]
-            x[f + c] = value
-            for d in range(c):
-                x[f + d] -= lx[row + d] * value
+        else:
+            for c in range(nc - 1, -1, -1):  # by rows of L: contiguous in the triangle
+                row = base + c * (c + 1) // 2
+                value = x[f + c] / lx[row + c]
+                x[f + c] = value
+                for d in range(c):
+                    x[f + d] -= lx[row + d] * value
 
 
 class SupernodalCholesky:

@@ -26,9 +26,9 @@ def dense_factor(chol: SupernodalCholesky) -> np.ndarray:
             for d in range(c + 1):
                 L[f + c, f + d] = panel[k]
                 k += 1
-        for t in range(nc, len(rows)):
-            L[rows[t], f : f + nc] = panel[k : k + nc]
-            k += nc
+        m = len(rows) - nc
+        for c in range(nc):  # the block below, by columns
+            L[rows[nc:], f + c] = panel[k + c * m : k + (c + 1) * m]
     return L
 
 
