@@ -1,14 +1,14 @@
 """Supernodal multifrontal sparse Cholesky factorization, compiled with numba.
 
-The factorization behind the eigensolver when no MKL runtime is installed. A sparse
-symmetric positive definite matrix ``A``, permuted by a fill-reducing order (the
-geometric nested dissection of :mod:`._ordering` on meshes), is factored as
-``P A P^T = L L^T``:
+The factorization behind the eigensolver. A sparse symmetric positive definite matrix
+``A``, permuted by a fill-reducing order (the geometric nested dissection of
+:mod:`._ordering` on meshes), is factored as ``P A P^T = L L^T``:
 
-1. symbolic analysis: the elimination tree (Liu's algorithm with path compression), the
-   column counts of ``L`` (one walk up the tree per row, O(nnz(L))), fundamental
-   supernodes (chains of columns with nested structure) merged into relaxed supernodes
-   when that adds few explicit zeros, and the row structure of every supernode;
+1. symbolic analysis: the elimination tree (Liu's algorithm with path compression),
+   renumbered in postorder (same fill, consecutive chains); the column counts of ``L``
+   (one walk up the tree per row, O(nnz(L))); fundamental supernodes (chains of columns
+   with nested structure) merged into relaxed supernodes when that adds few explicit
+   zeros; and the row structure of every supernode;
 2. numeric factorization, supernode by supernode in increasing order (children before
    parents): a dense frontal matrix gathers the supernode's columns of ``A`` and the
    update matrices of its children, then LAPACK's ``dpotrf``, BLAS ``dtrsm`` and ``dsyrk``
@@ -16,9 +16,9 @@ geometric nested dissection of :mod:`._ordering` on meshes), is factored as
    matrix for the parent;
 3. solves: a forward and a backward sweep over the supernodal panels.
 
-Its dense kernels run on scipy's optimized BLAS, which makes it faster than CHOLMOD built
-against the reference BLAS (the cholespy wheels): at 41k vertices about 1.5 times, at
-164k about 2 times (see docs/eigenfunctions.md).
+Its dense kernels run on scipy's optimized BLAS: the factorization is 1.1 to 2 times as
+fast as MKL PARDISO's and 3 to 5 times as fast as CHOLMOD built against the reference
+BLAS (the cholespy wheels); see ``benchmarks/bench_factorization.py``.
 """
 
 from __future__ import annotations
@@ -86,6 +86,41 @@ def _etree(n, indptr, indices):
                     parent[k] = i
                 k = nxt
     return parent
+
+
+@numba.njit(cache=True)
+def _postorder(parent):
+    """A postorder of the elimination forest (children in increasing order): numbering
+    the columns in it keeps the fill and makes every chain of the tree consecutive, so
+    that supernodes can form."""
+    n = len(parent)
+    head = np.full(n, -1, np.int64)  # first child
+    sibling = np.full(n, -1, np.int64)  # next child of the same parent
+    for j in range(n - 1, -1, -1):
+        p = parent[j]
+        if p != -1:
+            sibling[j] = head[p]
+            head[p] = j
+    order = np.empty(n, np.int64)
+    stack = np.empty(n, np.int64)
+    k = 0
+    for root in range(n):
+        if parent[root] != -1:
+            continue
+        top = 0
+        stack[0] = root
+        while top >= 0:
+            j = stack[top]
+            child = head[j]
+            if child == -1:
+                order[k] = j
+                k += 1
+                top -= 1
+            else:
+                head[j] = sibling[child]  # visit the next child next time
+                top += 1
+                stack[top] = child
+    return order
 
 
 @numba.njit(cache=True)
@@ -503,6 +538,10 @@ class SupernodalCholesky:
             raise ValueError(f"perm must be a permutation of range({n})")
         B = A[self.perm][:, self.perm].tocsr()
         B.sum_duplicates()
+        parent = _etree(n, B.indptr.astype(np.int64), B.indices.astype(np.int64))
+        post = _postorder(parent)
+        self.perm = self.perm[post]
+        B = B[post][:, post].tocsr()
         B.sort_indices()
         indptr = B.indptr.astype(np.int64)
         indices = B.indices.astype(np.int64)
