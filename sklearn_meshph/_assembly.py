@@ -145,6 +145,19 @@ def edge_matrix_csr(n, faces, weights, laplacian):
     return data[:pos], indices[:pos], indptr  # scipy's (data, indices, indptr) order
 
 
+@numba.njit(cache=True, inline="always")
+def _sorted_face(faces, f):
+    """The three vertex indices of face ``f`` in increasing order."""
+    a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+    if a > b:
+        a, b = b, a
+    if b > c:
+        b, c = c, b
+    if a > b:
+        a, b = b, a
+    return a, b, c
+
+
 @numba.njit(cache=True)
 def first_of_duplicate_faces(faces):
     """Mask keeping the first face of every group listing the same three vertices.
@@ -158,26 +171,14 @@ def first_of_duplicate_faces(faces):
     table = np.full(size, -1, np.int64)
     keep = np.ones(m, dtype=np.bool_)
     for f in range(m):
-        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
-        if a > b:
-            a, b = b, a
-        if b > c:
-            b, c = c, b
-        if a > b:
-            a, b = b, a
+        a, b, c = _sorted_face(faces, f)
         h = (a * 0x9E3779B1 + b * 0x85EBCA77 + c * 0xC2B2AE3D) & (size - 1)
         while True:
             g = table[h]
             if g == -1:
                 table[h] = f
                 break
-            x, y, z = faces[g, 0], faces[g, 1], faces[g, 2]
-            if x > y:
-                x, y = y, x
-            if y > z:
-                y, z = z, y
-            if x > y:
-                x, y = y, x
+            x, y, z = _sorted_face(faces, g)
             if x == a and y == b and z == c:
                 keep[f] = False
                 break

@@ -211,6 +211,17 @@ def _supernodes(n, parent, counts, relax):
     return first, sparent
 
 
+@numba.njit(cache=True, inline="always")
+def _add_rows(rows, last, s, mark, buffer, count):
+    """Append to ``buffer[:count]`` the rows at or after ``last`` not yet marked ``s``."""
+    for i in rows:
+        if i >= last and mark[i] != s:
+            mark[i] = s
+            buffer[count] = i
+            count += 1
+    return count
+
+
 @numba.njit(cache=True)
 def _symbolic_rows(n, indptr, indices, first, sparent):
     """Row structure of every supernode: flat sorted rows, pointers, and children lists."""
@@ -238,21 +249,11 @@ def _symbolic_rows(n, indptr, indices, first, sparent):
             mark[c] = s
             buffer[count] = c
             count += 1
-        for c in range(f, last):
-            for p in range(indptr[c], indptr[c + 1]):
-                i = indices[p]
-                if i >= last and mark[i] != s:
-                    mark[i] = s
-                    buffer[count] = i
-                    count += 1
-        for q in range(child_ptr[s], child_ptr[s + 1]):
+        for c in range(f, last):  # the supernode's columns of A
+            count = _add_rows(indices[indptr[c] : indptr[c + 1]], last, s, mark, buffer, count)
+        for q in range(child_ptr[s], child_ptr[s + 1]):  # the children's rows
             ch = child[q]
-            for p in range(rowptr[ch], rowptr[ch + 1]):
-                i = rowind[p]
-                if i >= last and mark[i] != s:
-                    mark[i] = s
-                    buffer[count] = i
-                    count += 1
+            count = _add_rows(rowind[rowptr[ch] : rowptr[ch + 1]], last, s, mark, buffer, count)
         while rowptr[s] + count > capacity:
             capacity *= 2
             grown = np.empty(capacity, np.int64)
@@ -379,6 +380,55 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
 _BLAS_SOLVE_COLUMNS = 8
 
 
+@numba.njit(cache=True, inline="always")
+def _panel(first, rowptr, lptr, s, ints):
+    """Supernode ``s``: first column, columns ``nc``, start of the rows below its diagonal
+    block in ``rowind``, their count ``m``, and the offsets of its diagonal block and of
+    the block below in ``lx``. Sets ``ints[:2]`` to ``nc, m`` for the BLAS calls."""
+    f = first[s]
+    nc = first[s + 1] - f
+    r0 = rowptr[s] + nc
+    m = rowptr[s + 1] - r0
+    base = lptr[s]
+    ints[0] = nc
+    ints[1] = m
+    return f, nc, r0, m, base, base + nc * (nc + 1) // 2
+
+
+@numba.njit(cache=True, inline="always")
+def _tpsv(dtpsv, chars, ints, trans, ap, x):
+    """``x <- U^{-T} x`` (``trans=1``) or ``U^{-1} x`` (``trans=2``) for the upper triangle
+    ``U`` of order ``ints[0]`` packed by columns in ``ap``; ``chars`` is "UTN"."""
+    dtpsv(
+        chars[0:].ctypes,
+        chars[trans:].ctypes,
+        chars[2:].ctypes,
+        ints[0:].ctypes,
+        ap.ctypes,
+        x.ctypes,
+        ints[2:].ctypes,
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def _gemv(dgemv, chars, ints, scalars, trans, alpha, beta, a, x, y):
+    """``y <- scalars[alpha] op(A) x + scalars[beta] y`` for the ``ints[1] x ints[0]``
+    column-major ``A`` in ``a``; ``op`` is the transpose with ``trans=1``, none with 2."""
+    dgemv(
+        chars[trans:].ctypes,
+        ints[1:].ctypes,
+        ints[0:].ctypes,
+        scalars[alpha:].ctypes,
+        a.ctypes,
+        ints[1:].ctypes,
+        x.ctypes,
+        ints[2:].ctypes,
+        scalars[beta:].ctypes,
+        y.ctypes,
+        ints[2:].ctypes,
+    )
+
+
 # Reassociation lets the compiler vectorize the dot products (a fixed order for a given
 # machine and build: results stay reproducible).
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
@@ -395,26 +445,11 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
     scalars = np.array([1.0, 0.0, -1.0])
     ns = len(first) - 1
     for s in range(ns):  # forward: L y = x
-        f = first[s]
-        nc = first[s + 1] - f
-        r0 = rowptr[s] + nc  # rows of L21
-        m = rowptr[s + 1] - r0
-        base = lptr[s]
-        below = base + nc * (nc + 1) // 2
+        f, nc, r0, m, base, below = _panel(first, rowptr, lptr, s, ints)
         use_blas = nc >= _BLAS_SOLVE_COLUMNS
-        ints[0] = nc
-        ints[1] = m
         xs = x[f:]
         if use_blas:  # y = U^{-T} x_J
-            dtpsv(
-                chars[0:].ctypes,
-                chars[1:].ctypes,
-                chars[2:].ctypes,
-                ints[0:].ctypes,
-                lx[base:].ctypes,
-                xs.ctypes,
-                ints[2:].ctypes,
-            )
+            _tpsv(dtpsv, chars, ints, 1, lx[base:], xs)
         else:
             for c in range(nc):
                 value = x[f + c]
@@ -425,19 +460,7 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
         if m == 0:
             continue
         if use_blas:  # work = L21 y
-            dgemv(
-                chars[2:].ctypes,
-                ints[1:].ctypes,
-                ints[0:].ctypes,
-                scalars[0:].ctypes,
-                lx[below:].ctypes,
-                ints[1:].ctypes,
-                xs.ctypes,
-                ints[2:].ctypes,
-                scalars[1:].ctypes,
-                work.ctypes,
-                ints[2:].ctypes,
-            )
+            _gemv(dgemv, chars, ints, scalars, 2, 0, 1, lx[below:], xs, work)
         else:
             work[:m] = 0.0
             for c in range(nc):
@@ -448,33 +471,14 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
         for t in range(m):
             x[rowind[r0 + t]] -= work[t]
     for s in range(ns - 1, -1, -1):  # backward: L^T x = y
-        f = first[s]
-        nc = first[s + 1] - f
-        r0 = rowptr[s] + nc
-        m = rowptr[s + 1] - r0
-        base = lptr[s]
-        below = base + nc * (nc + 1) // 2
+        f, nc, r0, m, base, below = _panel(first, rowptr, lptr, s, ints)
         use_blas = nc >= _BLAS_SOLVE_COLUMNS
-        ints[0] = nc
-        ints[1] = m
         xs = x[f:]
         if m > 0:
             for t in range(m):
                 work[t] = x[rowind[r0 + t]]
             if use_blas:  # x_J -= L21^T work
-                dgemv(
-                    chars[1:].ctypes,
-                    ints[1:].ctypes,
-                    ints[0:].ctypes,
-                    scalars[2:].ctypes,
-                    lx[below:].ctypes,
-                    ints[1:].ctypes,
-                    work.ctypes,
-                    ints[2:].ctypes,
-                    scalars[0:].ctypes,
-                    xs.ctypes,
-                    ints[2:].ctypes,
-                )
+                _gemv(dgemv, chars, ints, scalars, 1, 2, 0, lx[below:], work, xs)
             else:
                 for c in range(nc):
                     col = below + c * m
@@ -483,15 +487,7 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
                         value += lx[col + t] * work[t]
                     x[f + c] -= value
         if use_blas:  # x_J = U^{-1} x_J
-            dtpsv(
-                chars[0:].ctypes,
-                chars[2:].ctypes,
-                chars[2:].ctypes,
-                ints[0:].ctypes,
-                lx[base:].ctypes,
-                xs.ctypes,
-                ints[2:].ctypes,
-            )
+            _tpsv(dtpsv, chars, ints, 2, lx[base:], xs)
         else:
             for c in range(nc - 1, -1, -1):  # by rows of L: contiguous in the triangle
                 row = base + c * (c + 1) // 2
