@@ -71,6 +71,8 @@ def factor():
     solver = PARDISO[0]
     solver.factorize(upper)
     solver.set_phase(33)
+    # The solve phase alone: pypardiso's public solve() hashes the whole matrix on every
+    # call to check that it is the factorized one, which is no part of PARDISO's cost.
     return lambda b: solver._call_pardiso(upper, np.ascontiguousarray(b))
 
 def run_eigsh():

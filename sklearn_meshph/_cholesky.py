@@ -288,9 +288,10 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
     lx = np.empty(lptr[ns])
     work = np.empty(max_rows * max_rows)
     pos = np.zeros(n, np.int64)
+    relative = np.empty(max_rows, np.int64)
     updates = [np.empty((0, 0)) for _ in range(ns)]
     chars = np.array([ord("U"), ord("L"), ord("T"), ord("N")], np.uint8)
-    ints = np.zeros(6, np.int32)
+    ints = np.zeros(4, np.int32)
     scalars = np.array([1.0, -1.0])
     for s in range(ns):
         f = first[s]
@@ -314,10 +315,12 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
             update = updates[ch]
             nu = update.shape[0]
             offset = rowptr[ch + 1] - nu
+            for a in range(nu):  # the child's rows in the front
+                relative[a] = pos[rowind[offset + a]]
             for a in range(nu):
-                ra = pos[rowind[offset + a]]
+                ra = relative[a]
                 for b in range(a + 1):
-                    front[ra, pos[rowind[offset + b]]] += update[a, b]
+                    front[ra, relative[b]] += update[a, b]
             updates[ch] = np.empty((0, 0))
         # Fortran sees front^T: its upper triangle is our lower one.
         ints[0] = nc
