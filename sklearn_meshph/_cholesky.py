@@ -24,13 +24,13 @@ BLAS (the cholespy wheels); see ``benchmarks/bench_factorization.py``.
 from __future__ import annotations
 
 import ctypes
-import functools
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 from numba.extending import get_cython_function_address
-from threadpoolctl import ThreadpoolController
+
+from ._utils import one_blas_thread
 
 __all__ = ["SupernodalCholesky"]
 
@@ -55,20 +55,6 @@ _dtpsv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P)(
 _dgemv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P)(
     get_cython_function_address("scipy.linalg.cython_blas", "dgemv")
 )
-
-
-@functools.cache
-def _controller() -> ThreadpoolController:
-    return ThreadpoolController()
-
-
-def _one_blas_thread():
-    """Context limiting BLAS to one thread (about 30 us with a cached controller).
-
-    Thousands of small BLAS calls: a threaded BLAS made the factorization 20 times
-    slower on a 2-core machine, and its results depend on the thread count.
-    """
-    return _controller().limit(limits=1, user_api="blas")
 
 
 @numba.njit(cache=True)
@@ -550,7 +536,9 @@ class SupernodalCholesky:
         self.rowptr, self.rowind, child_ptr, child = _symbolic_rows(
             n, indptr, indices, self.first, sparent
         )
-        with _one_blas_thread():
+        # One BLAS thread: for thousands of small calls a threaded BLAS made the
+        # factorization 20 times slower on 2 cores, and its results depend on the count.
+        with one_blas_thread():
             self.lptr, self.lx, info = _numeric(
                 n,
                 indptr,
@@ -581,7 +569,7 @@ class SupernodalCholesky:
         if b.shape != (self.shape[0],):
             raise ValueError(f"right-hand side must have shape ({self.shape[0]},), got {b.shape}")
         x = b[self.perm]
-        with _one_blas_thread():
+        with one_blas_thread():
             _solve(
                 x,
                 self.first,

@@ -12,10 +12,9 @@ from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_memory, validate_data
-from threadpoolctl import threadpool_limits
 
 from ._mesh import COMPONENT_POLICIES, _where, check_mesh, clean_mesh
-from ._utils import as_sample_list, sequence_input_tags
+from ._utils import as_sample_list, one_blas_thread, sequence_input_tags
 from .laplacian import LAPLACIANS, build_laplacian, generalized_eigenpairs
 from .scalar_field import ScalarField
 
@@ -72,7 +71,7 @@ def _repeats(values: np.ndarray, i: int) -> np.ndarray:
 
 
 def _eigen_one(mesh, index, *, indices, laplacian, normalization, components, seed, memory):
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         vertices, faces = check_mesh(mesh, index=index)
         solve = memory.cache(mesh_eigenpairs, ignore=["index"])
         n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
