@@ -156,8 +156,7 @@ def _supernodes(n, parent, counts, relax):
         if s == ns:
             merged.append(first[ns])
             break
-        prev = merged[-1]  # current group: columns first[prev_index]..first[s]
-        a0 = prev
+        a0 = merged[-1]  # the current group holds columns a0 .. first[s] - 1
         a1 = first[s]
         b1 = first[s + 1]
         last_a = a1 - 1
@@ -168,8 +167,7 @@ def _supernodes(n, parent, counts, relax):
             rows = max(counts[a0], counts[a1] + na)
             added = (rows - counts[a0]) * na
             total = na + nb
-            current = zeros[len(merged) - 1]
-            new_zeros = current + added
+            new_zeros = zeros[len(merged) - 1] + added
             size = total * rows
             fraction = new_zeros / size
             if (
