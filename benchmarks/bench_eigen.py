@@ -44,7 +44,9 @@ def transformer():
     return LaplacianEigenTransformer(eigen_index=1).fit_transform([(V, F)])[0].eigenvalues
 
 def floor():
-    from sklearn_meshph.laplacian import ShiftInvertOperator, cotangent_laplacian, eigen_shift
+    from sklearn_meshph.spectral.eigensolver import eigen_shift
+    from sklearn_meshph.spectral.factorization import ShiftInvertOperator
+    from sklearn_meshph.spectral.laplacians import cotangent_laplacian
     L, M = cotangent_laplacian(V, F)
     return ShiftInvertOperator(L - eigen_shift(L, M) * M, points=V)
 

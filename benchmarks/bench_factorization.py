@@ -27,7 +27,9 @@ import json, resource, sys, time
 import numpy as np, scipy.sparse as sp, trimesh
 from scipy.sparse.linalg import LinearOperator, eigsh
 from threadpoolctl import threadpool_limits
-from sklearn_meshph.laplacian import ShiftInvertOperator, cotangent_laplacian, eigen_shift
+from sklearn_meshph.spectral.eigensolver import eigen_shift
+from sklearn_meshph.spectral.factorization import ShiftInvertOperator
+from sklearn_meshph.spectral.laplacians import cotangent_laplacian
 threadpool_limits(1)
 method, sub, k = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 
@@ -54,7 +56,7 @@ V, L, M, sigma, A = ellipsoid(3)
 
 def factor():
     if method in ("ours", "superlu"):
-        op = ShiftInvertOperator(A, points=V, method="cholesky" if method == "ours" else "lu")
+        op = ShiftInvertOperator(A, points=V, solver="cholesky" if method == "ours" else "superlu")
         return op.matvec
     if method == "cholmod":
         from cholespy import CholeskySolverD, MatrixType

@@ -27,7 +27,8 @@ import numpy as np
 import trimesh
 from _common import median_time
 
-from sklearn_meshph.persistence import edge_adjacency, sublevel_h0
+from sklearn_meshph.mesh._graph import mesh_edges as edge_adjacency
+from sklearn_meshph.persistence.lower_star import sublevel_h0
 
 FILTRATIONS = ("sublevel", "extended", "symmetric")
 

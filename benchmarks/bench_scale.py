@@ -34,8 +34,8 @@ MATRIX = r"""
 import json, resource, sys, threading, time
 import numpy as np
 from joblib.externals.loky import get_reusable_executor
+from sklearn_meshph import pairwise_diagram_distances
 from sklearn_meshph.diagrams import check_sample
-from sklearn_meshph.distance_transformer import pairwise_diagram_distances
 n, n_jobs, path = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 rng = np.random.default_rng(0)
 def diagram(k):

@@ -1,16 +1,36 @@
 """sklearn-meshph: learning from triangle meshes with persistent homology of Laplacian
-eigenfunctions, as scikit-learn estimators."""
+eigenfunctions, as scikit-learn estimators.
 
-from ._mesh import check_mesh, clean_mesh
-from .converters import from_giotto, from_gudhi, from_persim, to_giotto, to_gudhi, to_persim
+One sub-package per stage over a shared mesh layer (see ``docs/architecture.md``):
+:mod:`.mesh` (input, validation, cleaning, ``ScalarField``), :mod:`.spectral` (Laplacians,
+eigensolver, ``LaplacianEigenTransformer``), :mod:`.persistence` (lower-star and extended
+persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
+``DiagramDistance``, converters); :mod:`.datasets`, :mod:`.plotting` and :mod:`.cli`
+beside them.
+"""
+
 from .datasets import load_mesh_folder, make_shapes
-from .distance_transformer import DiagramDistance
-from .distances import bottleneck_distance, wasserstein_distance
-from .eigen import LaplacianEigenTransformer, RepeatedEigenvalueWarning
-from .laplacian import cotangent_laplacian, graph_laplacian, laplacian_eigenfunctions
-from .persistence import lower_star_persistence
-from .persistence_transformer import LowerStarPersistence
-from .scalar_field import ScalarField
+from .diagrams import (
+    DiagramDistance,
+    bottleneck_distance,
+    from_giotto,
+    from_gudhi,
+    from_persim,
+    pairwise_diagram_distances,
+    to_giotto,
+    to_gudhi,
+    to_persim,
+    wasserstein_distance,
+)
+from .mesh import ScalarField, check_mesh, clean_mesh
+from .persistence import LowerStarPersistence, lower_star_persistence
+from .spectral import (
+    LaplacianEigenTransformer,
+    RepeatedEigenvalueWarning,
+    cotangent_laplacian,
+    graph_laplacian,
+    laplacian_eigenfunctions,
+)
 
 __version__ = "0.1.0.dev0"
 
@@ -32,6 +52,7 @@ __all__ = [
     "load_mesh_folder",
     "lower_star_persistence",
     "make_shapes",
+    "pairwise_diagram_distances",
     "to_giotto",
     "to_gudhi",
     "to_persim",

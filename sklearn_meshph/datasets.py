@@ -9,6 +9,8 @@ import numpy as np
 import trimesh
 from sklearn.utils import Bunch, check_random_state
 
+from .mesh.reading import read_mesh_file
+
 __all__ = ["load_mesh_folder", "make_shapes"]
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
@@ -71,7 +73,7 @@ def load_mesh_folder(path, *, extensions=MESH_EXTENSIONS, load=True) -> Bunch:
             f"no mesh files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
         )
     data = (
-        [trimesh.load(f, process=False, force="mesh") for f in filenames]
+        [read_mesh_file(f, f"sample {k}") for k, f in enumerate(filenames)]
         if load
         else [str(f) for f in filenames]
     )
@@ -176,9 +178,9 @@ def make_shapes(
     """Generate a labelled set of synthetic closed meshes.
 
     Six classes of genus-0 shapes, each an ellipsoidal body with smooth limbs:
-    ``"blob"`` (no limb), ``"rod"`` (two opposite long limbs), ``"tripod"`` (three in a
-    plane), ``"tetrapod"`` (four, tetrahedral), ``"star"`` (six short ones) and
-    ``"hand"`` (five on one side). Every mesh gets a random pose (limb directions turned
+    ``"blob"`` (no limb), ``"snake"`` (two opposite long limbs), ``"tripod"`` (three in
+    a plane), ``"quadruped"`` (four legs below and a head), ``"star"`` (six short ones)
+    and ``"hand"`` (five on one side). Every mesh gets a random pose (limb directions turned
     by up to 15 degrees, limb lengths and body axes varied by 10-15%), a random rotation,
     a random uniform scale between 0.1 and 10, small radial noise, and a random
     resolution: a UV sphere tessellation with 18 to 40 rings and segments (about 300 to

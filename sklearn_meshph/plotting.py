@@ -116,7 +116,7 @@ def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="cool
     if hasattr(vertices, "values") and hasattr(vertices, "faces"):
         field = vertices
         vertices, faces = field.vertices, field.faces
-        values = field.values if field.values.ndim == 1 else field.values[:, 0]
+        values = field.columns()[0]
     plt = _pyplot()
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 

@@ -8,9 +8,10 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sklearn_meshph._cholesky import SupernodalCholesky
-from sklearn_meshph._ordering import geometric_nested_dissection
-from sklearn_meshph.laplacian import cotangent_laplacian, eigen_shift
+from sklearn_meshph.spectral._cholesky import SupernodalCholesky
+from sklearn_meshph.spectral._ordering import geometric_nested_dissection
+from sklearn_meshph.spectral.eigensolver import eigen_shift
+from sklearn_meshph.spectral.laplacians import cotangent_laplacian
 
 
 def dense_factor(chol: SupernodalCholesky) -> np.ndarray:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sklearn_meshph import bottleneck_distance
-from sklearn_meshph.converters import (
+from sklearn_meshph.diagrams.converters import (
     from_giotto,
     from_gudhi,
     from_persim,

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from sklearn_meshph import load_mesh_folder, make_shapes
-from sklearn_meshph.__main__ import main
+from sklearn_meshph.cli import main
 
 
 def test_make_shapes_is_reproducible_balanced_and_valid():

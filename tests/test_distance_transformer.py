@@ -129,7 +129,7 @@ def test_identical_on_a_dask_cluster():
 
 
 def test_many_blocks_float32_and_memmap_output(tmp_path, monkeypatch):
-    from sklearn_meshph import distance_transformer
+    from sklearn_meshph.diagrams import pairwise as distance_transformer
 
     monkeypatch.setattr(distance_transformer, "_MAX_TASK_PAIRS", 50)  # many small blocks
     diagrams = random_diagrams(60, seed=7)

@@ -8,7 +8,7 @@ from scipy.optimize import linear_sum_assignment
 
 from sklearn_meshph import bottleneck_distance, wasserstein_distance
 from sklearn_meshph.diagrams import check_diagram
-from sklearn_meshph.distances import _threshold_bottleneck
+from sklearn_meshph.diagrams._bottleneck import _threshold_bottleneck
 
 gudhi = pytest.importorskip("gudhi")
 hera = pytest.importorskip("gudhi.hera")
@@ -215,7 +215,7 @@ def test_matching_is_none_when_essential_counts_differ():
 
 def test_bottleneck_narrows_millions_of_candidates_exactly():
     """Large enough that the pairwise candidates are narrowed by strided samples."""
-    from sklearn_meshph.distances import _COLLECT, _pair_values
+    from sklearn_meshph.diagrams._bottleneck import _COLLECT, _pair_values
 
     rng = np.random.default_rng(3)
     a = rng.random((1200, 2)) @ [[1, 1], [0, 0.5]]

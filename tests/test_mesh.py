@@ -128,7 +128,8 @@ def test_compiled_duplicates_and_components_match_references():
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
-    from sklearn_meshph._assembly import first_of_duplicate_faces, vertex_components
+    from sklearn_meshph.mesh._geometry import first_of_duplicate_faces
+    from sklearn_meshph.mesh._graph import connected_components as vertex_components
 
     rng = np.random.default_rng(0)
     n = 300

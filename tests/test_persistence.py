@@ -6,12 +6,10 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sklearn_meshph.persistence import (
-    closed_surface_edges,
-    edge_adjacency,
-    function_diagrams,
-    lower_star_persistence,
-)
+from sklearn_meshph import LowerStarPersistence, lower_star_persistence
+from sklearn_meshph.mesh._graph import mesh_edges
+from sklearn_meshph.persistence.extended import closed_surface
+from sklearn_meshph.persistence.filtrations import function_diagrams
 
 gudhi = pytest.importorskip("gudhi")
 
@@ -106,15 +104,9 @@ def test_float64_values_are_not_rounded():
 
 
 def diagrams_of(vertices, faces, values, filtration="extended"):
-    adjacency = edge_adjacency(faces, len(vertices))
-    return function_diagrams(
-        adjacency,
-        values,
-        filtration=filtration,
-        essential="keep",
-        min_persistence=0.0,
-        surface=closed_surface_edges(faces, len(vertices)),
-    )
+    sample = ((vertices, faces), values)
+    diagrams = LowerStarPersistence(filtration=filtration).fit_transform([sample])[0]
+    return list(diagrams) if isinstance(diagrams, tuple) else [diagrams]
 
 
 def torus(n_major=24, n_minor=12):
@@ -246,7 +238,7 @@ def test_essential_h1_of_a_torus_and_a_sphere_pinched_at_a_vertex_matches_gudhi(
     values = vertices[:, 0] + 0.2 * np.sin(4 * vertices[:, 1])
     reference, _, _ = gudhi_extended(faces, values)
     ext1 = diagrams_of(vertices, faces, values)[3]
-    assert closed_surface_edges(faces, len(vertices))[2] == 2
+    assert closed_surface(faces, mesh_edges(faces, len(vertices)))[2] == 2
     expected = np.asarray(reference[3], dtype=float).reshape(-1, 2)
     np.testing.assert_allclose(sorted_rows(ext1), sorted_rows(expected), rtol=0, atol=1e-12)
 
@@ -294,7 +286,7 @@ def test_random_graphs_match_gudhi(n, seed, levels):
 
 def test_adjacency_is_symmetric_without_self_loops():
     _, faces = sphere(1)
-    adjacency = edge_adjacency(faces, 42)
+    adjacency = mesh_edges(faces, 42)
     assert (adjacency != adjacency.T).nnz == 0 and adjacency.diagonal().sum() == 0
     diagrams = function_diagrams(
         adjacency, np.arange(42.0), filtration="symmetric", essential="keep", min_persistence=0

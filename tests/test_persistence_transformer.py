@@ -7,9 +7,7 @@ import pytest
 import trimesh
 from sklearn.base import clone
 
-from sklearn_meshph.persistence import lower_star_persistence
-from sklearn_meshph.persistence_transformer import LowerStarPersistence
-from sklearn_meshph.scalar_field import ScalarField
+from sklearn_meshph import LowerStarPersistence, ScalarField, lower_star_persistence
 
 
 def sorted_rows(diagram):

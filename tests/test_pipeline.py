@@ -18,7 +18,7 @@ from sklearn_meshph import (
     LowerStarPersistence,
     make_shapes,
 )
-from sklearn_meshph.__main__ import cross_validate
+from sklearn_meshph.cli import cross_validate
 
 
 @pytest.fixture(scope="module")

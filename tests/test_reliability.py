@@ -243,7 +243,7 @@ def test_whole_pipeline_identical_for_any_n_jobs_and_the_threading_backend():
 
 
 def test_a_failing_eigensolver_names_the_sample(good, monkeypatch):
-    import sklearn_meshph.eigen as eigen
+    import sklearn_meshph.spectral.transformer as eigen
 
     solve = eigen.generalized_eigenpairs
 

@@ -1,4 +1,4 @@
-"""LaplacianEigenTransformer: meshes to Laplacian eigenfunctions."""
+"""LaplacianEigenTransformer: meshes to Laplacian eigenfunctions, one cached solve each."""
 
 from __future__ import annotations
 
@@ -8,21 +8,28 @@ from numbers import Integral
 
 import numpy as np
 from joblib import Parallel, delayed
-from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils import check_random_state
-from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
-from sklearn.utils.validation import check_memory, validate_data
+from sklearn.utils.validation import check_memory
 
-from ._mesh import COMPONENT_POLICIES, _where, check_mesh, clean_mesh
-from ._utils import as_sample_list, one_blas_thread, sequence_input_tags
-from .laplacian import LAPLACIANS, build_laplacian, generalized_eigenpairs
-from .scalar_field import ScalarField
+from .._base import SampleTransformer
+from .._param_validation import HasMethods, Interval, Options
+from .._threads import one_blas_thread
+from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked
+from ..mesh.scalar_field import ScalarField
+from ..mesh.validation import check_mesh, where
+from .eigensolver import generalized_eigenpairs
+from .factorization import SOLVERS
+from .laplacians import LAPLACIANS
 
 __all__ = ["LaplacianEigenTransformer", "RepeatedEigenvalueWarning"]
 
 # Eigenpairs are solved in blocks of this many, whatever the requested index, so that a
 # grid search over small indices reuses one cached solve per mesh.
 _EIGS_BLOCK = 8
+# A repeated eigenvalue that reaches the end of a block makes the block grow, so that the
+# warning can state the whole multiplicity, by at most this many eigenpairs: beyond it
+# (a "book" of many triangles on one edge) the warning says "at least".
+_MAX_GROWTH = 4 * _EIGS_BLOCK
 # Eigenvalues closer than this (relative) count as one repeated eigenvalue.
 _REPEATED_RTOL = 1e-3
 
@@ -31,7 +38,9 @@ class RepeatedEigenvalueWarning(UserWarning):
     """The requested eigenvalue is (nearly) repeated: its eigenfunction is not unique."""
 
 
-def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eigs, seed, index):
+def mesh_eigenpairs(
+    vertices, faces, laplacian, normalization, components, n_eigs, seed, index, solver="auto"
+):
     """Clean one validated mesh and solve its eigenpairs: the unit ``memory`` caches.
 
     The cache key is the input mesh's content and the settings (``index``, the sample's
@@ -40,16 +49,18 @@ def mesh_eigenpairs(vertices, faces, laplacian, normalization, components, n_eig
     mesh scaled to unit area) and the graph Laplacian gets ``M = I / n``, so that
     eigenvectors have unit mean square whatever the scale and the vertex count.
     """
-    clean = clean_mesh(vertices, faces, components=components, index=index)
-    L, M = build_laplacian(clean.vertices, clean.faces, laplacian)
+    clean = clean_checked(vertices, faces, components=components, index=index)
+    L, M = LAPLACIANS[laplacian].value(clean.vertices, clean.faces)
     if normalization == "area":
         M = M / M.diagonal().sum()
     n_eigs = min(n_eigs, len(clean.vertices))
     try:
-        values, vectors = generalized_eigenpairs(L, M, n_eigs, seed=seed, points=clean.vertices)
+        values, vectors = generalized_eigenpairs(
+            L, M, n_eigs, seed=seed, points=clean.vertices, solver=solver
+        )
     except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, the factorization
         raise ValueError(
-            f"{_where(index)}: the eigensolver failed on the cleaned mesh "
+            f"{where(index)}: the eigensolver failed on the cleaned mesh "
             f"({len(clean.vertices)} vertices, {len(clean.faces)} faces): {error}"
         ) from error
     return clean, values, vectors
@@ -70,50 +81,61 @@ def _repeats(values: np.ndarray, i: int) -> np.ndarray:
     return np.flatnonzero(np.abs(values - values[i]) <= _REPEATED_RTOL * abs(values[i]))
 
 
-def _eigen_one(mesh, index, *, indices, laplacian, normalization, components, seed, memory):
+def _reaches_end(values: np.ndarray, indices) -> bool:
+    """Whether a requested repeated eigenvalue may go on past the last computed one."""
+    last = len(values) - 1
+    return any(0 < i <= last and _repeats(values, i)[-1] == last for i in indices)
+
+
+def _eigen_one(mesh, index, *, indices, settings, seed, memory):
     with one_blas_thread():
         vertices, faces = check_mesh(mesh, index=index)
         solve = memory.cache(mesh_eigenpairs, ignore=["index"])
         n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
+        limit = n_eigs + _MAX_GROWTH
         while True:
             clean, values, vectors = solve(
-                vertices, faces, laplacian, normalization, components, n_eigs, seed, index
+                vertices,
+                faces,
+                settings["laplacian"],
+                settings["normalization"],
+                settings["components"],
+                n_eigs,
+                seed,
+                index,
+                settings["solver"],
             )
             n = len(clean.vertices)
-            n_eigs = min(n_eigs, n)
-            # A repeated eigenvalue that reaches the last computed one may go on: solve
-            # a larger block so that the warning can state its whole multiplicity.
-            cut = any(
-                i < n_eigs and i > 0 and _repeats(values, i)[-1] == n_eigs - 1 for i in indices
-            )
-            if not cut or n_eigs == n:
+            if n_eigs >= min(n, limit) or not _reaches_end(values, indices):
                 break
-            n_eigs += _EIGS_BLOCK
-    return clean, values, vectors, None if n == len(vertices) else clean.vertex_indices
+            n_eigs = min(n_eigs + _EIGS_BLOCK, limit)
+    complete = len(values) == n
+    return clean, values, vectors, complete, None if n == len(vertices) else clean.vertex_indices
 
 
-def _warn_if_repeated(values: np.ndarray, indices, sample: int) -> None:
+def _warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -> None:
     for i in indices:
         if i == 0:
             continue
         close = _repeats(values, i)
         if len(close) < 2:
             continue
+        open_ended = not complete and close[-1] == len(values) - 1
         lam = values[i]
         others = np.delete(values, close)
         gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
         spread = (values[close].max() - values[close].min()) / abs(lam)
         warnings.warn(
             f"sample {sample}: eigenvalue {i} ({lam:.6g}) is repeated with multiplicity "
-            f"{len(close)} (eigenvalues {close[0]}-{close[-1]} agree within a relative "
-            f"{spread:.1e}; relative gap to the next distinct one {gap:.2g}); its "
-            "eigenfunction is not unique",
+            f"{'at least ' if open_ended else ''}{len(close)} (eigenvalues {close[0]}-"
+            f"{close[-1]} agree within a relative {spread:.1e}; relative gap to the next "
+            f"distinct one {gap:.2g}); its eigenfunction is not unique",
             RepeatedEigenvalueWarning,
             stacklevel=4,
         )
 
 
-class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
+class LaplacianEigenTransformer(SampleTransformer):
     """Compute a Laplacian eigenfunction on each mesh.
 
     The first stage of the mesh-learning pipeline: each mesh becomes a
@@ -126,9 +148,9 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
     eigen_index : int or tuple of int, default=(1, 2, 3)
         Which eigenfunction: 0 is the constant one, 1 the Fiedler vector, and so on. A
         tuple gives several eigenfunctions, as columns of ``ScalarField.values``. The
-        default, the first three non-constant ones, is the paper's suggested extension:
-        on the 60 Sumner meshes it lifts 5-fold 1-NN accuracy from 0.95 (Fiedler vector
-        alone) to 1.00. ``eigen_index=1`` is the paper's setting.
+        default, the first three non-constant ones, is the paper's suggested extension
+        (its accuracy against the Fiedler vector alone is in ``docs/eigenfunctions.md``);
+        ``eigen_index=1`` is the paper's setting.
     laplacian : {"cotangent", "graph"}, default="cotangent"
         ``"cotangent"``: finite-element Laplace-Beltrami operator (cotangent stiffness,
         barycentric lumped mass), solved as ``L phi = lambda M phi``; it depends on the
@@ -156,6 +178,10 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
     random_state : int, RandomState instance or None, default=0
         Seeds ARPACK's start vector (the same for every mesh). The default makes
         results reproducible; the output does not depend on it beyond rounding.
+    solver : {"auto", "cholesky", "superlu"}, default="auto"
+        Factorization backend of the shift-invert eigensolver: our supernodal Cholesky
+        (``"auto"`` and ``"cholesky"``) or SciPy's SuperLU. Both give the same
+        eigenpairs up to rounding.
 
     Attributes
     ----------
@@ -193,14 +219,16 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
     [17.46, 11.3]
     """
 
+    _sample_kind = "meshes"
     _parameter_constraints: dict = {
         "eigen_index": [Interval(Integral, 0, None, closed="left"), tuple],
-        "laplacian": [StrOptions(set(LAPLACIANS))],
-        "normalization": [StrOptions({"area", "none"})],
-        "components": [StrOptions(set(COMPONENT_POLICIES))],
+        "laplacian": [Options(LAPLACIANS)],
+        "normalization": [Options(("area", "none"))],
+        "components": [Options(COMPONENT_POLICIES)],
         "memory": [None, str, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
         "random_state": ["random_state"],
+        "solver": [Options(SOLVERS)],
     }
 
     def __init__(
@@ -212,6 +240,7 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         memory=None,
         n_jobs=None,
         random_state=0,
+        solver="auto",
     ):
         self.eigen_index = eigen_index
         self.laplacian = laplacian
@@ -220,6 +249,7 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         self.memory = memory
         self.n_jobs = n_jobs
         self.random_state = random_state
+        self.solver = solver
 
     def _indices(self) -> tuple[int, ...]:
         if isinstance(self.eigen_index, tuple):
@@ -234,23 +264,9 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
             return tuple(int(i) for i in self.eigen_index)
         return (int(self.eigen_index),)
 
-    @_fit_context(prefer_skip_nested_validation=True)
-    def fit(self, X, y=None):
-        """Check the parameters; nothing is learned.
-
-        Parameters
-        ----------
-        X : sequence of meshes
-            Each a trimesh.Trimesh, a (vertices, faces) pair or a path.
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        validate_data(self, X=as_sample_list(X), skip_check_array=True, ensure_2d=False)
+    def _check_params(self) -> None:
+        super()._check_params()
         self._indices()
-        return self
 
     def transform(self, X):
         """Compute the eigenfunction(s) of every mesh.
@@ -267,8 +283,8 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
             (n_vertices,) for an int ``eigen_index`` and (n_vertices, k) for a tuple of
             k indices, and ``eigenvalues`` the matching eigenvalues.
         """
-        self._validate_params()
-        meshes = as_sample_list(X)
+        self._check_params()
+        meshes = self._check_samples(X)
         indices = self._indices()
         if isinstance(self.random_state, Integral):
             seed = int(self.random_state)
@@ -278,31 +294,33 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
         # Largest meshes first: workers that finish early pick up the small ones, so a
         # collection of mixed sizes keeps every worker busy to the end.
         order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
-        solved = Parallel(n_jobs=self.n_jobs)(
-            delayed(_eigen_one)(
-                meshes[i],
-                i,
-                indices=indices,
-                laplacian=self.laplacian,
-                normalization=self.normalization,
-                components=self.components,
-                seed=seed,
-                memory=memory,
+        settings = {
+            "laplacian": self.laplacian,
+            "normalization": self.normalization,
+            "components": self.components,
+            "solver": self.solver,
+        }
+        # Held for the whole parallel call: threads of a threading backend then share
+        # one limit instead of setting and restoring it under each other's feet.
+        with one_blas_thread():
+            solved = Parallel(n_jobs=self.n_jobs)(
+                delayed(_eigen_one)(
+                    meshes[i], i, indices=indices, settings=settings, seed=seed, memory=memory
+                )
+                for i in order
             )
-            for i in order
-        )
         results = [None] * len(meshes)
         for i, result in zip(order, solved, strict=True):
             results[i] = result
         fields = []
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
-        for i, (clean, values, vectors, vertex_indices) in enumerate(results):
+        for i, (clean, values, vectors, complete, vertex_indices) in enumerate(results):
             if max(indices) >= len(values):
                 raise ValueError(
                     f"sample {i}: eigen_index {max(indices)} needs at least "
                     f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
                 )
-            _warn_if_repeated(values, indices, i)
+            _warn_if_repeated(values, indices, i, complete)
             fields.append(
                 ScalarField(
                     vertices=clean.vertices,
@@ -313,6 +331,3 @@ class LaplacianEigenTransformer(TransformerMixin, BaseEstimator):
                 )
             )
         return fields
-
-    def __sklearn_tags__(self):
-        return sequence_input_tags(super().__sklearn_tags__(), requires_fit=False)

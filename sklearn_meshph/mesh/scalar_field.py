@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .validation import check_faces, check_values, check_vertices
+
 __all__ = ["ScalarField"]
 
 
@@ -16,6 +18,9 @@ class ScalarField:
     This is what :class:`LaplacianEigenTransformer` returns per mesh and what
     :class:`LowerStarPersistence` takes. Everything is plain NumPy, so it pickles and
     crosses process boundaries cheaply.
+
+    Every field is validated when it is made (shapes, finite values, face indices in
+    range), so the compiled stages downstream can trust it.
 
     Parameters
     ----------
@@ -49,24 +54,11 @@ class ScalarField:
     vertex_indices: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
-        vertices = np.asarray(self.vertices, dtype=np.float64)
-        faces = np.asarray(self.faces)
-        values = np.asarray(self.values, dtype=np.float64)
-        if vertices.ndim != 2 or vertices.shape[1] != 3:
-            raise ValueError(f"vertices must have shape (n, 3), got {vertices.shape}")
-        if faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu":
-            raise ValueError(
-                f"faces must be an integer array of shape (m, 3), got {faces.dtype} {faces.shape}"
-            )
-        if values.ndim not in (1, 2) or values.shape[0] != len(vertices):
-            raise ValueError(
-                f"values must have shape ({len(vertices)},) or ({len(vertices)}, k), "
-                f"got {values.shape}"
-            )
-        if not np.isfinite(values).all():
-            raise ValueError("values must be finite (no NaN or inf)")
+        vertices = check_vertices(self.vertices, "ScalarField")
+        faces = check_faces(self.faces, len(vertices), "ScalarField")
+        values = check_values(self.values, len(vertices), "ScalarField")
         object.__setattr__(self, "vertices", vertices)
-        object.__setattr__(self, "faces", faces.astype(np.int64, copy=False))
+        object.__setattr__(self, "faces", faces)
         object.__setattr__(self, "values", values)
         if self.eigenvalues is not None:
             object.__setattr__(
@@ -87,6 +79,11 @@ class ScalarField:
 
     def columns(self) -> list[np.ndarray]:
         """The functions as a list of 1-D arrays."""
-        if self.values.ndim == 1:
-            return [self.values]
-        return [self.values[:, j] for j in range(self.values.shape[1])]
+        return self.columns_of(self.values)
+
+    @staticmethod
+    def columns_of(values: np.ndarray) -> list[np.ndarray]:
+        """The columns of a ``(n,)`` or ``(n, k)`` array of vertex values, as 1-D arrays."""
+        if values.ndim == 1:
+            return [values]
+        return [values[:, j] for j in range(values.shape[1])]

@@ -16,9 +16,8 @@ The factorization behind the eigensolver. A sparse symmetric positive definite m
    matrix for the parent;
 3. solves: a forward and a backward sweep over the supernodal panels.
 
-Its dense kernels run on scipy's optimized BLAS: the factorization is 1.1 to 2 times as
-fast as MKL PARDISO's and 3 to 5 times as fast as CHOLMOD built against the reference
-BLAS (the cholespy wheels); see ``benchmarks/bench_factorization.py``.
+Its speed against SuperLU, CHOLMOD and MKL PARDISO is measured by
+``benchmarks/bench_factorization.py`` and recorded in ``docs/eigenfunctions.md``.
 """
 
 from __future__ import annotations
@@ -30,7 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba.extending import get_cython_function_address
 
-from ._utils import one_blas_thread
+from .._threads import one_blas_thread
 
 __all__ = ["SupernodalCholesky"]
 
@@ -493,8 +492,8 @@ class SupernodalCholesky:
         Symmetric positive definite with both triangles stored (only the lower one is
         read, so an unsymmetric ``A`` is not detected).
     perm : ndarray of shape (n,), optional
-        Fill-reducing order: row ``k`` of ``P A P^T`` is row ``perm[k]`` of ``A``. Without
-        it, reverse Cuthill-McKee (far more fill than a nested dissection on large meshes).
+        Fill-reducing order: row ``k`` of ``P A P^T`` is row ``perm[k]`` of ``A`` (see
+        :func:`.factorization.fill_reducing_order`). None keeps the natural order.
 
     Raises
     ------
@@ -511,9 +510,7 @@ class SupernodalCholesky:
         if not np.isfinite(A.data).all():
             raise ValueError("the matrix has a non-finite entry (NaN or inf)")
         if perm is None:
-            from scipy.sparse.csgraph import reverse_cuthill_mckee
-
-            perm = reverse_cuthill_mckee(A, symmetric_mode=True)
+            perm = np.arange(n)
         self.perm = np.ascontiguousarray(perm, dtype=np.int64)
         if self.perm.shape != (n,) or not np.array_equal(
             np.bincount(self.perm, minlength=n), np.ones(n, dtype=np.int64)
@@ -534,8 +531,8 @@ class SupernodalCholesky:
         self.rowptr, self.rowind, child_ptr, child = _symbolic_rows(
             n, indptr, indices, self.first, sparent
         )
-        # One BLAS thread: for thousands of small calls a threaded BLAS made the
-        # factorization 20 times slower on 2 cores, and its results depend on the count.
+        # One BLAS thread: a threaded BLAS is far slower on thousands of small calls,
+        # and its results depend on the thread count.
         with one_blas_thread():
             self.lptr, self.lx, info = _numeric(
                 n,

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_diagram", "check_sample"]
+from .._base import as_sample_list
+
+__all__ = ["check_diagram", "check_sample", "check_samples"]
 
 
 def check_diagram(diagram, *, index: int | None = None, part: int | None = None) -> np.ndarray:
@@ -52,3 +54,21 @@ def check_sample(sample, index: int | None = None) -> tuple[np.ndarray, ...]:
     if isinstance(sample, tuple):
         return tuple(check_diagram(d, index=index, part=k) for k, d in enumerate(sample))
     return (check_diagram(sample, index=index),)
+
+
+def check_samples(samples, n_diagrams: int | None = None) -> list[tuple[np.ndarray, ...]]:
+    """Validated samples, all with the same number of diagrams (``n_diagrams`` if given).
+
+    Raises
+    ------
+    ValueError
+        If a diagram is malformed (naming the sample), if the samples hold different
+        numbers of diagrams, or if they do not hold ``n_diagrams``.
+    """
+    checked = [check_sample(s, i) for i, s in enumerate(as_sample_list(samples, "diagrams"))]
+    counts = sorted({len(s) for s in checked})
+    if len(counts) > 1:
+        raise ValueError(f"samples have different numbers of diagrams: {counts}")
+    if n_diagrams is not None and counts[0] != n_diagrams:
+        raise ValueError(f"X has {counts[0]} diagrams per sample, the fitted data {n_diagrams}")
+    return checked

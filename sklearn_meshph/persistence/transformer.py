@@ -6,31 +6,27 @@ from numbers import Integral, Real
 
 import numpy as np
 from joblib import Parallel, delayed
-from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
-from sklearn.utils._param_validation import Interval, StrOptions
-from sklearn.utils.validation import validate_data
 
-from ._mesh import check_mesh
-from ._utils import as_sample_list, sequence_input_tags
-from .persistence import (
-    FILTRATIONS,
-    check_values,
-    closed_surface_edges,
-    edge_adjacency,
-    function_diagrams,
-)
-from .scalar_field import ScalarField
+from .._base import SampleTransformer
+from .._param_validation import Interval, Options
+from ..mesh._graph import mesh_edges
+from ..mesh.scalar_field import ScalarField
+from ..mesh.validation import check_mesh, check_values, where
+from .extended import closed_surface
+from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
 
 __all__ = ["LowerStarPersistence"]
 
 
-def _sample_mesh_and_values(sample, index):
+def _sample_arrays(sample, index):
+    """Faces, vertex count and values of a sample, validated once: a ScalarField was
+    validated when it was made, a ``(mesh, values)`` pair is validated here."""
     if isinstance(sample, ScalarField):
-        return sample.vertices, sample.faces, sample.values
+        return sample.faces, sample.n_vertices, sample.values
     if isinstance(sample, tuple | list) and len(sample) == 2:
         mesh, values = sample
         vertices, faces = check_mesh(mesh, index=index)
-        return vertices, faces, values
+        return faces, len(vertices), check_values(values, len(vertices), where(index))
     raise TypeError(
         f"sample {index}: expected a ScalarField or a (mesh, values) pair, "
         f"got {type(sample).__name__}"
@@ -38,13 +34,12 @@ def _sample_mesh_and_values(sample, index):
 
 
 def _diagrams_one(sample, index, *, filtration, essential, min_persistence):
-    vertices, faces, values = _sample_mesh_and_values(sample, index)
-    values = check_values(values, len(vertices), index)
-    adjacency = edge_adjacency(faces, len(vertices))
-    surface = closed_surface_edges(faces, len(vertices)) if filtration == "extended" else None
-    columns = [values] if values.ndim == 1 else [values[:, j] for j in range(values.shape[1])]
+    faces, n_vertices, values = _sample_arrays(sample, index)
+    adjacency = mesh_edges(faces, n_vertices)
+    needs_surface = FILTRATIONS[filtration].value.needs_surface
+    surface = closed_surface(faces, adjacency) if needs_surface else None
     diagrams = []
-    for column in columns:
+    for column in ScalarField.columns_of(values):
         diagrams.extend(
             function_diagrams(
                 adjacency,
@@ -58,7 +53,7 @@ def _diagrams_one(sample, index, *, filtration, essential, min_persistence):
     return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
 
 
-class LowerStarPersistence(TransformerMixin, BaseEstimator):
+class LowerStarPersistence(SampleTransformer):
     """Persistence diagrams of the lower-star filtrations of vertex functions.
 
     The second stage of the mesh-learning pipeline: each sample, a :class:`ScalarField`
@@ -122,11 +117,9 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
     boundary the first three diagrams are exactly the H0 diagrams named above and the
     fourth is empty; they are then not the whole of extended persistence.
 
-    Measured on the 60 Sumner meshes (Fiedler vector of the cotangent Laplacian at unit
-    area, bottleneck, leave-one-out 1-NN; ``python benchmarks/bench_persistence.py
-    --accuracy``): ``"sublevel"`` 0.833 with the eigen stage's sign rule and 0.823 on
-    average over random signs, ``"extended"`` 0.967 and 0.900, ``"symmetric"`` 0.983
-    whatever the signs. With eigenfunctions 1 to 3, ``"symmetric"`` reaches 1.000.
+    The accuracy of each filtration on the Sumner meshes is measured by
+    ``python benchmarks/bench_persistence.py --accuracy`` (figures in
+    ``docs/persistence.md``).
 
     References
     ----------
@@ -150,9 +143,10 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
            [-1.,  1.]])
     """
 
+    _sample_kind = "scalar fields"
     _parameter_constraints: dict = {
-        "filtration": [StrOptions(set(FILTRATIONS))],
-        "essential": [StrOptions({"keep", "drop", "max"})],
+        "filtration": [Options(FILTRATIONS)],
+        "essential": [Options(ESSENTIAL_POLICIES)],
         "min_persistence": [Interval(Real, 0, None, closed="left")],
         "n_jobs": [Integral, None],
     }
@@ -162,24 +156,6 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
         self.essential = essential
         self.min_persistence = min_persistence
         self.n_jobs = n_jobs
-
-    @_fit_context(prefer_skip_nested_validation=True)
-    def fit(self, X, y=None):
-        """Check the parameters; nothing is learned.
-
-        Parameters
-        ----------
-        X : sequence of ScalarField or (mesh, values) pairs
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        validate_data(
-            self, X=as_sample_list(X, "scalar fields"), skip_check_array=True, ensure_2d=False
-        )
-        return self
 
     def transform(self, X):
         """Compute the persistence diagram(s) of every sample.
@@ -194,8 +170,8 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
             One entry per sample: an ``(n, 2)`` float64 array, or a tuple of them (see
             Notes).
         """
-        self._validate_params()
-        samples = as_sample_list(X, "scalar fields")
+        self._check_params()
+        samples = self._check_samples(X)
         return Parallel(n_jobs=self.n_jobs)(
             delayed(_diagrams_one)(
                 sample,
@@ -219,20 +195,7 @@ class LowerStarPersistence(TransformerMixin, BaseEstimator):
         -------
         list of str
         """
-        per_function = {
-            "symmetric": ["H0(f) + H0(-f)", "(min, max) + reflected"],
-            "sublevel": ["sublevel H0"],
-            "superlevel": ["superlevel H0"],
-            "extended": [
-                "ordinary H0",
-                "superlevel H0 (saddle, max)",
-                "(min, max)",
-                "essential H1",
-            ],
-        }[self.filtration]
+        per_function = list(FILTRATIONS[self.filtration].value.diagram_names)
         if n_functions == 1:
             return per_function
         return [f"f{k + 1}: {name}" for k in range(n_functions) for name in per_function]
-
-    def __sklearn_tags__(self):
-        return sequence_input_tags(super().__sklearn_tags__(), requires_fit=False)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .diagrams import check_diagram, check_sample
+from .validation import check_diagram, check_sample, check_samples
 
 __all__ = ["from_giotto", "from_gudhi", "from_persim", "to_giotto", "to_gudhi", "to_persim"]
 
@@ -117,11 +117,8 @@ def to_giotto(samples, dimensions=None) -> np.ndarray:
     >>> to_giotto([np.array([[0.0, 1.0]]), np.empty((0, 2))])[:, :, :2].tolist()
     [[[0.0, 1.0]], [[0.0, 0.0]]]
     """
-    parts = [check_sample(s, index=i) for i, s in enumerate(samples)]
-    n_parts = {len(p) for p in parts}
-    if len(n_parts) > 1:
-        raise ValueError(f"samples have different numbers of diagrams: {sorted(n_parts)}")
-    n_parts = n_parts.pop() if parts else 0
+    parts = check_samples(samples)
+    n_parts = len(parts[0])
     dims = tuple(range(n_parts)) if dimensions is None else tuple(dimensions)
     if len(dims) != n_parts or len(set(dims)) != len(dims):
         raise ValueError(f"dimensions must be {n_parts} distinct integers, got {dims}")

@@ -4,8 +4,7 @@ Recursively cut the vertex set by a plane through the median of its projection o
 direction, and number the shorter boundary of the cut (a vertex separator) last. Surface
 meshes have separators of about sqrt(n) vertices along such planes, so the factor of a
 mesh Laplacian ordered this way has near-linear fill, as with METIS, while the ordering
-costs O(n log n) with no graph partitioner: 0.02 s at 41k vertices where METIS takes
-0.3 s.
+costs O(n log n) with no graph partitioner (timings in ``docs/eigenfunctions.md``).
 """
 
 import numba

@@ -1,0 +1,73 @@
+"""What the estimators share: samples that are meshes, fields or diagrams, not rows."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.utils.validation import validate_data
+
+from ._param_validation import check_params
+
+__all__ = ["SampleTransformer", "as_sample_list"]
+
+
+def as_sample_list(X, what: str = "meshes") -> list:
+    """``X`` as a list of samples, refusing a single sample passed by mistake."""
+    if isinstance(X, np.ndarray) and X.dtype == object and X.ndim == 1:
+        X = list(X)
+    if isinstance(X, str | bytes | os.PathLike | np.ndarray) or hasattr(X, "vertices"):
+        raise TypeError(
+            f"X must be a sequence of {what} (one per sample), got a single "
+            f"{type(X).__name__}; wrap it in a list"
+        )
+    if not isinstance(X, Sequence) and not hasattr(X, "__iter__"):
+        raise TypeError(f"X must be a sequence of {what}, got {type(X).__name__}")
+    samples = list(X)
+    if not samples:
+        raise ValueError(f"X is empty: expected at least one of {what}")
+    return samples
+
+
+class SampleTransformer(TransformerMixin, BaseEstimator):
+    """Base of the transformers whose samples are meshes, scalar fields or diagrams.
+
+    Subclasses declare ``_parameter_constraints`` and ``_sample_kind`` (the word used in
+    error messages); ``fit`` checks the parameters and the samples, and
+    ``_check_params`` lets ``transform`` do the same for estimators that learn nothing.
+    """
+
+    _sample_kind = "samples"
+    _requires_fit = False
+
+    def _check_params(self) -> None:
+        check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
+
+    def _check_samples(self, X) -> list:
+        return as_sample_list(X, self._sample_kind)
+
+    def fit(self, X, y=None):
+        """Check the parameters and the samples; learns nothing unless overridden.
+
+        Parameters
+        ----------
+        X : sequence of samples
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        samples = self._check_samples(X)
+        validate_data(self, X=samples, skip_check_array=True, ensure_2d=False)
+        return self
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.requires_fit = self._requires_fit
+        tags.input_tags.two_d_array = False
+        tags.transformer_tags.preserves_dtype = []
+        return tags

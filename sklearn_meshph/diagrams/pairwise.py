@@ -1,0 +1,146 @@
+"""Pairwise distance matrices between collections of diagrams, in parallel blocks."""
+
+from __future__ import annotations
+
+from numbers import Integral, Real
+
+import numpy as np
+from joblib import Parallel, delayed, effective_n_jobs
+
+from .._param_validation import Interval, Options, validate_params
+from ._batch import pack, pair_distances
+from .distances import METRICS, kernel_metric
+from .validation import check_samples
+
+__all__ = ["pairwise_diagram_distances"]
+
+
+# Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
+_MAX_TASK_PAIRS = 1_000_000
+
+
+def _row_blocks(n_rows, pairs_per_row, n_tasks):
+    """Boundaries of consecutive row blocks holding about equal numbers of pairs."""
+    cumulative = np.concatenate([[0], np.cumsum(pairs_per_row)])
+    targets = np.linspace(0, cumulative[-1], n_tasks + 1)
+    bounds = np.unique(np.searchsorted(cumulative, targets, side="left"))
+    bounds[0], bounds[-1] = 0, n_rows
+    return np.unique(bounds)
+
+
+def _block_distances(left, right, start, stop, n_cols, symmetric, n_parts, code, order, p):
+    """Distances of rows ``start:stop`` (to the later columns only when symmetric)."""
+    if symmetric:
+        rows = np.concatenate([np.full(n_cols - i - 1, i) for i in range(start, stop)])
+        cols = np.concatenate([np.arange(i + 1, n_cols) for i in range(start, stop)])
+    else:
+        rows, cols = np.divmod(np.arange(start * n_cols, stop * n_cols), n_cols)
+    return pair_distances(left, right, rows, cols, n_parts, code, order, p)
+
+
+@validate_params(
+    {
+        "metric": [Options(METRICS)],
+        "order": [Interval(Real, 1, None, closed="left")],
+        "internal_p": [Interval(Real, 1, None, closed="left")],
+        "n_jobs": [Integral, None],
+    }
+)
+def pairwise_diagram_distances(
+    X,
+    Y=None,
+    *,
+    metric="bottleneck",
+    order=2.0,
+    internal_p=np.inf,
+    n_jobs=None,
+    dtype=np.float64,
+    out=None,
+) -> np.ndarray:
+    """Distance matrix between two collections of diagrams (or of tuples of diagrams).
+
+    The function behind :class:`DiagramDistance`, for matrices that should not be held
+    in memory twice: ``out`` (e.g. a :func:`numpy.lib.format.open_memmap` array)
+    receives the matrix instead of a new array.
+
+    Parameters
+    ----------
+    X : sequence of diagrams or of tuples of diagrams
+        Each sample an ``(n, 2)`` array or a tuple of them (all samples with the same
+        number of diagrams), as :class:`LowerStarPersistence` returns.
+    Y : sequence of diagrams or of tuples of diagrams, optional
+        The columns; ``None`` gives the symmetric matrix of ``X``, each unordered pair
+        computed once.
+    metric : {"bottleneck", "wasserstein"}, default="bottleneck"
+    order : float, default=2.0
+        The Wasserstein exponent q.
+    internal_p : float, default=inf
+        Ground metric between points for the Wasserstein distance.
+    n_jobs : int, default=None
+        ``None`` means 1 unless in a :func:`joblib.parallel_backend` context; ``-1``
+        means all processors. Results are identical for any ``n_jobs`` and backend.
+    dtype : numpy dtype, default=float64
+        Of the returned matrix (distances are computed in float64).
+    out : ndarray of shape (len(X), len(Y)), optional
+        Written in place and returned.
+
+    Returns
+    -------
+    ndarray of shape (len(X), len(Y))
+
+    Notes
+    -----
+    Rows are split into blocks of about equal work, a few per worker and at most a
+    million pairs each, every block one compiled loop; the pair indices are made inside
+    the workers, so memory stays bounded whatever the number of samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import pairwise_diagram_distances
+    >>> pairwise_diagram_distances([np.array([[0.0, 1.0]]), np.array([[0.0, 1.5]])])
+    array([[0. , 0.5],
+           [0.5, 0. ]])
+    """
+    left = check_samples(X)
+    right = None if Y is None else check_samples(Y, n_diagrams=len(left[0]))
+    shape = (len(left), len(left if right is None else right))
+    if out is not None and out.shape != shape:
+        raise ValueError(f"out has shape {out.shape}, expected {shape}")
+    return distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out)
+
+
+def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out):
+    """:func:`pairwise_diagram_distances` on validated samples."""
+    code, order = kernel_metric(metric, order, internal_p)
+    internal_p = float(internal_p)
+    symmetric = right is None
+    right = left if symmetric else right
+    n, m = len(left), len(right)
+    n_parts = len(left[0]) if n else 0
+    packed_left = pack(left)
+    packed_right = packed_left if symmetric else pack(right)
+    pairs_per_row = np.arange(n - 1, -1, -1) if symmetric else np.full(n, m)
+    total = int(pairs_per_row.sum())
+    n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
+    bounds = _row_blocks(n, pairs_per_row, n_tasks)
+    matrix = np.zeros((n, m), dtype=dtype) if out is None else out
+    tasks = Parallel(n_jobs=n_jobs, return_as="generator")(
+        delayed(_block_distances)(
+            packed_left, packed_right, a, b, m, symmetric, n_parts, code, order, internal_p
+        )
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    )
+    for a, b, values in zip(bounds[:-1], bounds[1:], tasks, strict=True):
+        if symmetric:
+            position = 0
+            for i in range(a, b):
+                row = values[position : position + n - i - 1]
+                matrix[i, i + 1 :] = row
+                matrix[i + 1 :, i] = row
+                position += n - i - 1
+        else:
+            matrix[a:b] = values.reshape(b - a, m)
+    if symmetric:
+        matrix[np.arange(n), np.arange(n)] = 0
+    return matrix

@@ -1,0 +1,129 @@
+"""The filtrations of a vertex function: the registry read by ``LowerStarPersistence``.
+
+Each entry computes the diagrams of one function from the mesh's edge adjacency (built
+once per mesh) and names them. A new filtration is a function
+``(adjacency, values, essential, surface) -> list of (n, 2) arrays``, the names of its
+diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._registry import Option, Registry
+from ..mesh._graph import connected_components
+from .extended import essential_h1_pairs
+from .lower_star import sublevel_h0
+
+__all__ = ["ESSENTIAL_POLICIES", "FILTRATIONS", "Filtration", "function_diagrams"]
+
+ESSENTIAL_POLICIES = ("keep", "drop", "max")
+
+
+@dataclass(frozen=True)
+class Filtration:
+    """How one function becomes diagrams: ``compute`` and the name of each diagram.
+
+    ``needs_surface``: ``compute`` uses the closed-surface edge structure (built once per
+    mesh, None on a mesh that is not a closed surface).
+    """
+
+    compute: Callable
+    diagram_names: tuple[str, ...]
+    needs_surface: bool = False
+
+
+def _reflect(diagram: np.ndarray) -> np.ndarray:
+    """The pairs of ``-f`` from those of ``f``: (b, d) -> (-d, -b)."""
+    return np.column_stack([-diagram[:, 1], -diagram[:, 0]])
+
+
+def _component_extremes(values, roots, adjacency):
+    """(min, max) of each connected component, in the order of the minima's ranks."""
+    n = adjacency.shape[0]
+    ends = np.column_stack([np.repeat(np.arange(n), np.diff(adjacency.indptr)), adjacency.indices])
+    _, labels = connected_components(n, ends)
+    maxima = np.full(labels.max() + 1, -np.inf)
+    np.maximum.at(maxima, labels, values)
+    return np.column_stack([values[roots], maxima[labels[roots]]])
+
+
+def _essential(births, values, roots, adjacency, policy):
+    if policy == "drop":
+        return np.empty((0, 2))
+    if policy == "max":
+        return _component_extremes(values, roots, adjacency)
+    return np.column_stack([births, np.full(len(births), np.inf)])
+
+
+def _sublevel(adjacency, values, essential, surface):
+    pairs, births, roots = sublevel_h0(adjacency, values)
+    return [np.vstack([pairs, _essential(births, values, roots, adjacency, essential)])]
+
+
+def _superlevel(adjacency, values, essential, surface):
+    return _sublevel(adjacency, -values, essential, surface)
+
+
+def _both_sweeps(adjacency, values):
+    sub, _, roots = sublevel_h0(adjacency, values)
+    sup, _, _ = sublevel_h0(adjacency, -values)
+    return sub, sup, _component_extremes(values, roots, adjacency)
+
+
+def _symmetric(adjacency, values, essential, surface):
+    sub, sup, extremes = _both_sweeps(adjacency, values)
+    return [np.vstack([sub, sup]), np.vstack([extremes, _reflect(extremes)])]
+
+
+def _extended(adjacency, values, essential, surface):
+    sub, sup, extremes = _both_sweeps(adjacency, values)
+    ext1 = np.empty((0, 2)) if surface is None else essential_h1_pairs(values, surface)
+    return [sub, _reflect(sup), extremes, ext1[ext1[:, 0] < ext1[:, 1]]]
+
+
+FILTRATIONS = Registry(
+    "filtration",
+    [
+        Option(
+            "symmetric",
+            Filtration(_symmetric, ("H0(f) + H0(-f)", "(min, max) + reflected")),
+            "H0 of f and of -f in one diagram, and each component's (min, max) with its "
+            "reflection: independent of the eigenvector's sign (the default)",
+        ),
+        Option(
+            "sublevel",
+            Filtration(_sublevel, ("sublevel H0",)),
+            "sublevel H0 of f, essential classes by `essential`: the paper's setting",
+        ),
+        Option(
+            "superlevel",
+            Filtration(_superlevel, ("superlevel H0",)),
+            "sublevel H0 of -f (superlevel sets of f), essential classes by `essential`",
+        ),
+        Option(
+            "extended",
+            Filtration(
+                _extended,
+                ("ordinary H0", "superlevel H0 (saddle, max)", "(min, max)", "essential H1"),
+                needs_surface=True,
+            ),
+            "extended persistence: ordinary H0, (saddle, max) pairs, each component's "
+            "(min, max) and, on a closed surface, the essential H1 pairs",
+        ),
+    ],
+)
+
+
+def function_diagrams(adjacency, values, *, filtration, essential, min_persistence, surface=None):
+    """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence).
+
+    ``surface`` (from :func:`.extended.closed_surface`, built once per mesh) enables the
+    essential H1 diagram of ``"extended"``; without it that diagram is empty.
+    """
+    diagrams = FILTRATIONS[filtration].value.compute(adjacency, values, essential, surface)
+    # Also drops the (min, max) pair of a component where the function is constant.
+    return [d[(d[:, 1] - d[:, 0]) > min_persistence] for d in diagrams]

@@ -1,0 +1,25 @@
+"""The spectral stage: mesh Laplacians, their eigenpairs and the eigen transformer.
+
+- :mod:`.laplacians`: ``cotangent_laplacian``, ``graph_laplacian`` and the registry
+  ``LAPLACIANS``;
+- :mod:`.eigensolver`: shift-invert Lanczos, sign rule, ``laplacian_eigenfunctions``;
+- :mod:`.factorization`: the factorization backends (registry ``SOLVERS``) over
+  :mod:`._cholesky` (our supernodal Cholesky) and SciPy's SuperLU, with the
+  fill-reducing order of :mod:`._ordering`;
+- :mod:`.transformer`: ``LaplacianEigenTransformer`` and its per-mesh cache.
+"""
+
+from .eigensolver import laplacian_eigenfunctions
+from .factorization import SOLVERS
+from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
+from .transformer import LaplacianEigenTransformer, RepeatedEigenvalueWarning
+
+__all__ = [
+    "LAPLACIANS",
+    "SOLVERS",
+    "LaplacianEigenTransformer",
+    "RepeatedEigenvalueWarning",
+    "cotangent_laplacian",
+    "graph_laplacian",
+    "laplacian_eigenfunctions",
+]

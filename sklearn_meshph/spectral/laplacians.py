@@ -1,0 +1,120 @@
+"""Laplacians of triangle meshes: the registry of discretizations.
+
+Each discretization returns a stiffness matrix ``L`` and a diagonal mass matrix ``M``
+for the generalized eigenproblem ``L phi = lambda M phi``:
+
+- ``"cotangent"``: the linear finite-element Laplace-Beltrami operator, cotangent
+  stiffness with the barycentric lumped mass (one third of the area of every incident
+  triangle per vertex, as lapy with ``lump=True``, potpourri3d and robust-laplacian).
+- ``"graph"``: the combinatorial graph Laplacian ``D - A`` of the mesh edges, with
+  ``M = I``. It ignores geometry and is not resolution invariant: its eigenvalues scale
+  with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
+
+A new discretization is a function ``(vertices, faces) -> (L, M)`` and one entry in
+:data:`LAPLACIANS`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .._registry import Option, Registry
+from ..mesh._graph import edge_matrix_csr, mesh_edges
+from ..mesh.validation import check_faces, check_vertices
+from ._assembly import cotangent_weights
+
+__all__ = ["LAPLACIANS", "cotangent_laplacian", "graph_laplacian"]
+
+
+def cotangent_laplacian(
+    vertices: np.ndarray, faces: np.ndarray
+) -> tuple[sp.csr_matrix, sp.dia_matrix]:
+    """Cotangent stiffness matrix and barycentric lumped mass matrix.
+
+    Parameters
+    ----------
+    vertices : ndarray of shape (n, 3)
+    faces : ndarray of shape (m, 3)
+        Non-degenerate triangles (see :func:`sklearn_meshph.clean_mesh`).
+
+    Returns
+    -------
+    L : scipy.sparse.csr_matrix of shape (n, n)
+        Symmetric positive semi-definite stiffness matrix,
+        ``L[i, j] = -(cot alpha_ij + cot beta_ij) / 2`` for an edge ``ij`` and rows
+        summing to zero.
+    M : scipy.sparse.dia_matrix of shape (n, n)
+        Diagonal lumped mass: a third of the area of the triangles around each vertex.
+
+    Notes
+    -----
+    Barycentric and Voronoi lumping differ per vertex by up to 18% on irregular meshes
+    and move eigenvalues in the fourth digit; barycentric lumping is positive on every
+    mesh (Voronoi areas need a fix-up on obtuse triangles) and matches lapy, potpourri3d
+    and robust-laplacian.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from sklearn_meshph import cotangent_laplacian
+    >>> sphere = trimesh.creation.icosphere(2)
+    >>> L, M = cotangent_laplacian(sphere.vertices, sphere.faces)
+    >>> bool(abs(L.sum()) < 1e-9), round(float(M.sum()), 2)
+    (True, 12.33)
+    """
+    vertices = check_vertices(vertices)
+    n = len(vertices)
+    faces = check_faces(faces, n)
+    weights, double_area = cotangent_weights(vertices, faces)
+    if not (double_area > 0).all():  # also catches NaN coordinates
+        bad = int(np.flatnonzero(~(double_area > 0))[0])
+        raise ValueError(
+            f"face {bad} has zero area (or a non-finite vertex): the cotangent Laplacian "
+            "needs non-degenerate triangles; clean the mesh with clean_mesh first"
+        )
+    L = sp.csr_matrix(edge_matrix_csr(n, faces, weights, True), shape=(n, n))
+    mass = np.bincount(faces.ravel(), weights=np.repeat(double_area / 6.0, 3), minlength=n)
+    return L, sp.diags(mass)
+
+
+def graph_laplacian(faces: np.ndarray, n_vertices: int) -> tuple[sp.csr_matrix, sp.dia_matrix]:
+    """Combinatorial graph Laplacian ``D - A`` of the mesh edges, and the identity.
+
+    Parameters
+    ----------
+    faces : ndarray of shape (m, 3)
+    n_vertices : int
+
+    Returns
+    -------
+    L : scipy.sparse.csr_matrix of shape (n, n)
+    M : scipy.sparse.dia_matrix
+        The identity, so that both Laplacians share one generalized-eigenproblem solver.
+    """
+    adjacency = mesh_edges(check_faces(faces, n_vertices), n_vertices)
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    return (sp.diags(degree) - adjacency).tocsr(), sp.identity(n_vertices, format="dia")
+
+
+def _graph(vertices, faces):
+    return graph_laplacian(faces, len(vertices))
+
+
+LAPLACIANS = Registry(
+    "laplacian",
+    [
+        Option(
+            "cotangent",
+            cotangent_laplacian,
+            "finite-element Laplace-Beltrami operator (cotangent stiffness, lumped mass): "
+            "depends on the geometry, not on the triangulation",
+        ),
+        Option(
+            "graph",
+            _graph,
+            "combinatorial graph Laplacian of the edges (M = I): ignores geometry, "
+            "depends on the resolution",
+        ),
+    ],
+)
