@@ -13,3 +13,23 @@ def median_time(repeats, func, *args, **kwargs):
         func(*args, **kwargs)
         times.append(time.perf_counter() - start)
     return float(np.median(times))
+
+
+def _status_mb(field):
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(field):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def peak_memory(func, *args):
+    """Peak resident-set growth (MB) while ``func`` runs (Linux: resets VmHWM first)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as refs:
+            refs.write("5")
+    except OSError:
+        return float("nan")
+    before = _status_mb("VmRSS")
+    func(*args)
+    return _status_mb("VmHWM") - before

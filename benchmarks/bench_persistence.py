@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from _common import median_time
+from _common import median_time, peak_memory
 
 from sklearn_meshph.mesh._graph import mesh_edges as edge_adjacency
 from sklearn_meshph.persistence.lower_star import sublevel_h0
@@ -69,26 +69,6 @@ def ripser_h0(edges, values):
         shape=(n, n),
     ).tocsr()
     return ripser(matrix, maxdim=0, distance_matrix=True)["dgms"][0]
-
-
-def _status_mb(field):
-    with open("/proc/self/status") as status:
-        for line in status:
-            if line.startswith(field):
-                return int(line.split()[1]) / 1024
-    return float("nan")
-
-
-def peak_memory(func, *args):
-    """Peak resident-set growth (MB) while ``func`` runs (Linux: resets VmHWM first)."""
-    try:
-        with open("/proc/self/clear_refs", "w") as refs:
-            refs.write("5")
-    except OSError:
-        return float("nan")
-    before = _status_mb("VmRSS")
-    func(*args)
-    return _status_mb("VmHWM") - before
 
 
 def loo_accuracy(matrix, y):

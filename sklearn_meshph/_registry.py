@@ -58,11 +58,26 @@ class Registry(Mapping):
         return "\n".join(rows)
 
 
+def all_registries() -> dict[str, Registry]:
+    """Every option family, by name: what the documentation's tables are made from."""
+    from .diagrams.distances import METRICS
+    from .persistence.filtrations import FILTRATIONS
+    from .spectral.factorization import SOLVERS
+    from .spectral.laplacians import LAPLACIANS
+
+    return {r.family: r for r in (LAPLACIANS, SOLVERS, FILTRATIONS, METRICS)}
+
+
 _BLOCK = re.compile(r"(<!-- registry: (\w+) -->\n)(.*?)(<!-- /registry -->)", re.DOTALL)
 
 
-def update_tables(text: str, registries: Mapping[str, Registry]) -> str:
-    """``text`` with every ``<!-- registry: family -->`` block replaced by its table."""
+def update_tables(text: str, registries: Mapping[str, Registry] | None = None) -> str:
+    """``text`` with every ``<!-- registry: family -->`` block replaced by its table.
+
+    ``python docs/update_tables.py`` applies it to the documentation; a test checks that
+    the tables there are up to date.
+    """
+    registries = all_registries() if registries is None else registries
 
     def replace(match):
         return match.group(1) + registries[match.group(2)].table() + "\n" + match.group(4)

@@ -91,18 +91,20 @@ FILTRATIONS = Registry(
         Option(
             "symmetric",
             Filtration(_symmetric, ("H0(f) + H0(-f)", "(min, max) + reflected")),
-            "H0 of f and of -f in one diagram, and each component's (min, max) with its "
-            "reflection: independent of the eigenvector's sign (the default)",
+            "two diagrams: `H0(f) + H0(-f)` merged, and each component's `(min, max)` "
+            "with its reflection; `f` and `-f` give identical output (the default)",
         ),
         Option(
             "sublevel",
             Filtration(_sublevel, ("sublevel H0",)),
-            "sublevel H0 of f, essential classes by `essential`: the paper's setting",
+            "sublevel H0 of `f`, essential classes by `essential`; depends on the sign "
+            "(the paper's setting)",
         ),
         Option(
             "superlevel",
             Filtration(_superlevel, ("superlevel H0",)),
-            "sublevel H0 of -f (superlevel sets of f), essential classes by `essential`",
+            "sublevel H0 of `-f` (superlevel sets of `f`), essential classes by "
+            "`essential`; depends on the sign",
         ),
         Option(
             "extended",
@@ -111,8 +113,9 @@ FILTRATIONS = Registry(
                 ("ordinary H0", "superlevel H0 (saddle, max)", "(min, max)", "essential H1"),
                 needs_surface=True,
             ),
-            "extended persistence: ordinary H0, (saddle, max) pairs, each component's "
-            "(min, max) and, on a closed surface, the essential H1 pairs",
+            "four diagrams of extended persistence: `Ord0` (min, saddle), superlevel "
+            "`(saddle, max)` pairs, `Ext0` `(min, max)` and, on a closed surface, the "
+            "essential H1 `Ext1+`; `-f` swaps the first two and reflects all",
         ),
     ],
 )

@@ -107,14 +107,15 @@ LAPLACIANS = Registry(
         Option(
             "cotangent",
             cotangent_laplacian,
-            "finite-element Laplace-Beltrami operator (cotangent stiffness, lumped mass): "
-            "depends on the geometry, not on the triangulation",
+            "finite-element Laplace-Beltrami operator: cotangent stiffness `L`, barycentric "
+            "lumped mass `M`, `L phi = lambda M phi`; depends on the surface, not on its "
+            "triangulation (the default)",
         ),
         Option(
             "graph",
             _graph,
-            "combinatorial graph Laplacian of the edges (M = I): ignores geometry, "
-            "depends on the resolution",
+            "combinatorial graph Laplacian `D - A` of the edges, `M = I`; depends on the "
+            "connectivity only, not resolution invariant (the paper's literal setting)",
         ),
     ],
 )
