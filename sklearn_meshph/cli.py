@@ -36,6 +36,11 @@ def _parse_index(text: str) -> int | tuple[int, ...]:
     return values[0] if len(values) == 1 else values
 
 
+def _add_option(parser, flag, registry, default):
+    """An option whose choices and help come from a stage's registry."""
+    parser.add_argument(flag, choices=registry.names, default=default, help=registry.help())
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m sklearn_meshph",
@@ -60,30 +65,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=LaplacianEigenTransformer().eigen_index,
         help="eigenfunction index (1 = Fiedler vector, the paper's choice) or a comma list",
     )
-    parser.add_argument(
-        "--laplacian",
-        choices=LAPLACIANS.names,
-        default=LaplacianEigenTransformer().laplacian,
-        help=LAPLACIANS.help(),
-    )
+    _add_option(parser, "--laplacian", LAPLACIANS, LaplacianEigenTransformer().laplacian)
     parser.add_argument(
         "--normalization",
         choices=("area", "none"),
         default="area",
         help="'area': unit-area mesh, scale and resolution free; 'none': the paper's literal",
     )
-    parser.add_argument(
-        "--filtration",
-        choices=FILTRATIONS.names,
-        default=LowerStarPersistence().filtration,
-        help=FILTRATIONS.help(),
-    )
-    parser.add_argument(
-        "--metric",
-        choices=METRICS.names,
-        default=DiagramDistance().metric,
-        help=METRICS.help(),
-    )
+    _add_option(parser, "--filtration", FILTRATIONS, LowerStarPersistence().filtration)
+    _add_option(parser, "--metric", METRICS, DiagramDistance().metric)
     parser.add_argument("--order", type=float, default=2.0, help="Wasserstein order q")
     parser.add_argument("--folds", type=int, default=5, help="stratified CV folds")
     parser.add_argument("--neighbors", type=int, default=1, help="k of the k-NN classifier")

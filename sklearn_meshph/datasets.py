@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import os
+from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
 import trimesh
 from sklearn.utils import Bunch, check_random_state
 
+from ._param_validation import Interval, validate_params
 from .mesh.reading import read_mesh_file
 
 __all__ = ["load_mesh_folder", "make_shapes"]
@@ -16,6 +18,7 @@ __all__ = ["load_mesh_folder", "make_shapes"]
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
 
+@validate_params({"extensions": [tuple, list], "load": ["boolean"]})
 def load_mesh_folder(path, *, extensions=MESH_EXTENSIONS, load=True) -> Bunch:
     """Load a folder of meshes with one class per sub-folder.
 
@@ -166,6 +169,16 @@ def _shape(name, rng, resolution):
     return trimesh.Trimesh(vertices, sphere.faces, process=False)
 
 
+@validate_params(
+    {
+        "n_per_class": [Interval(Integral, 1, None, closed="left")],
+        "classes": [tuple, list, None],
+        "resolution": [tuple, list],
+        "noise": [Interval(Real, 0, None, closed="left")],
+        "random_state": ["random_state"],
+        "return_X_y": ["boolean"],
+    }
+)
 def make_shapes(
     n_per_class: int = 10,
     *,
@@ -219,8 +232,6 @@ def make_shapes(
     unknown = [c for c in names if c not in _CLASSES]
     if unknown:
         raise ValueError(f"unknown classes {unknown}; available: {tuple(_CLASSES)}")
-    if n_per_class < 1:
-        raise ValueError(f"n_per_class must be at least 1, got {n_per_class}")
     rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
     meshes, target = [], []
     for label, name in enumerate(names):

@@ -6,13 +6,20 @@ essential classes; a sample with several diagrams is a tuple of such arrays.
 
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
 
+from .._param_validation import Interval, validate_params
 from .validation import check_diagram, check_sample, check_samples
 
 __all__ = ["from_giotto", "from_gudhi", "from_persim", "to_giotto", "to_gudhi", "to_persim"]
 
 
+_DIMENSION = {"dimension": [Interval(Integral, 0, None, closed="left")]}
+
+
+@validate_params(_DIMENSION)
 def to_gudhi(diagram, dimension: int = 0) -> list[tuple[int, tuple[float, float]]]:
     """A diagram as gudhi's ``persistence()`` list of ``(dimension, (birth, death))``.
 
@@ -34,6 +41,7 @@ def to_gudhi(diagram, dimension: int = 0) -> list[tuple[int, tuple[float, float]
     return [(dimension, (float(b), float(d))) for b, d in check_diagram(diagram)]
 
 
+@validate_params(_DIMENSION)
 def from_gudhi(persistence, dimension: int = 0) -> np.ndarray:
     """The pairs of one homology dimension of a gudhi ``persistence()`` list.
 
@@ -75,6 +83,7 @@ def to_persim(diagrams) -> list[np.ndarray]:
     return list(check_sample(diagrams))
 
 
+@validate_params(_DIMENSION)
 def from_persim(diagrams, dimension: int = 0) -> np.ndarray:
     """The diagram of one homology dimension from a persim list (ripser's ``"dgms"``).
 

@@ -147,6 +147,7 @@ class DiagramDistance(SampleTransformer):
         Parameters
         ----------
         X : sequence of diagrams or of tuples of diagrams
+            Stored as by :meth:`fit`, and compared with each other.
         y : ignored
 
         Returns

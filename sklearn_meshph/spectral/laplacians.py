@@ -16,9 +16,12 @@ A new discretization is a function ``(vertices, faces) -> (L, M)`` and one entry
 
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
 import scipy.sparse as sp
 
+from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
 from ..mesh._graph import edge_matrix_csr, mesh_edges
 from ..mesh.validation import check_faces, check_vertices
@@ -78,6 +81,7 @@ def cotangent_laplacian(
     return L, sp.diags(mass)
 
 
+@validate_params({"n_vertices": [Interval(Integral, 1, None, closed="left")]})
 def graph_laplacian(faces: np.ndarray, n_vertices: int) -> tuple[sp.csr_matrix, sp.dia_matrix]:
     """Combinatorial graph Laplacian ``D - A`` of the mesh edges, and the identity.
 
