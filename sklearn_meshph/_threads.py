@@ -25,8 +25,8 @@ _limiter = None
 
 @functools.cache
 def _controller() -> ThreadpoolController:
-    # Made once per process: entering then costs about 20 us, against 2 ms for
-    # ``threadpool_limits``, which looks up the loaded libraries each time.
+    # Made once per process: ``threadpool_limits`` looks up the loaded libraries at
+    # every call, which costs more than many of the solves it would wrap.
     return ThreadpoolController()
 
 

@@ -304,7 +304,7 @@ def _one_sided_bottleneck(a, b):
 
 
 # Below this many point pairs (300 x 300) the minimax augmenting paths beat the threshold
-# search (measured: 0.33 ms against 0.94 ms at 100 x 100, even at 400 x 400).
+# search (benchmarks/bench_distances.py; figures in docs/distances.md).
 _SMALL_PAIRS = 90_000
 
 
