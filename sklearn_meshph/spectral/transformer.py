@@ -200,7 +200,9 @@ class LaplacianEigenTransformer(SampleTransformer):
     magnitude is made positive). Persistence defaults of :class:`LowerStarPersistence`
     are sign invariant anyway. When the requested eigenvalue is repeated (relative
     spread below 1e-3, as on spheres and tori) its eigenfunction is an arbitrary member
-    of an eigenspace and a :class:`RepeatedEigenvalueWarning` says so.
+    of an eigenspace and a :class:`RepeatedEigenvalueWarning` says so, with the
+    multiplicity; the solve grows by at most 32 eigenpairs to find it, beyond which the
+    warning says "multiplicity at least m".
 
     References
     ----------
