@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sklearn_meshph import bottleneck_distance
-from sklearn_meshph.diagrams.converters import (
+from sklearn_meshph import (
+    bottleneck_distance,
     from_giotto,
     from_gudhi,
     from_persim,

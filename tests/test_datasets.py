@@ -3,8 +3,16 @@
 import numpy as np
 import pytest
 import trimesh
+from sklearn.model_selection import StratifiedKFold, cross_val_score
+from sklearn.neighbors import KNeighborsClassifier
 
-from sklearn_meshph import load_mesh_folder, make_shapes
+from sklearn_meshph import (
+    DiagramDistance,
+    LaplacianEigenTransformer,
+    LowerStarPersistence,
+    load_mesh_folder,
+    make_shapes,
+)
 from sklearn_meshph.cli import main
 
 
@@ -44,7 +52,7 @@ def write_folder(root):
         (root / name).mkdir()
         mesh.export(root / name / "b.obj")
         mesh.export(root / name / "a.ply")
-    (root / "_extra").mkdir()
+    (root / "_extra").mkdir()  # folders starting with an underscore are skipped
     trimesh.creation.box().export(root / "_extra" / "ignored.obj")
     (root / "box" / "notes.txt").write_text("not a mesh")
 
@@ -76,15 +84,17 @@ def test_load_sumner_folder(sumner_dir):
 
 def test_plots_are_written(tmp_path):
     plotting = pytest.importorskip("sklearn_meshph.plotting")
-    plt = plotting._pyplot()
-    fig, axes = plt.subplots(1, 2)
+    figure = pytest.importorskip("matplotlib.figure")
+    fig = figure.Figure()  # no pyplot: drawn on given axes
+    axes = fig.subplots(1, 2)
     diagram = np.array([[0.0, 1.0], [0.2, 0.5], [0.1, np.inf]])
-    plotting.plot_diagram(diagram, ax=axes[0])
+    assert plotting.plot_diagram(diagram, ax=axes[0]) is axes[0]
     assert len(axes[0].collections[0].get_offsets()) == 3
     plotting.plot_diagram((diagram, diagram[:2]), ax=axes[1], labels=["H0", "ess"])
     assert [len(c.get_offsets()) for c in axes[1].collections] == [3, 2]
     fig.savefig(tmp_path / "diagrams.png")
-    plt.close(fig)
+    ax = plotting.plot_diagram(diagram[:2])  # a new figure of its own
+    assert ax not in axes and len(ax.collections[0].get_offsets()) == 2
     mesh = trimesh.creation.icosphere(1)
     ax = plotting.plot_mesh_function(mesh.vertices, mesh.faces, mesh.vertices[:, 2])
     ax.figure.savefig(tmp_path / "mesh.png")
@@ -92,6 +102,9 @@ def test_plots_are_written(tmp_path):
     assert len(ax.collections) == 3
     ax.figure.savefig(tmp_path / "embedding.png")
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("diagrams.png", "mesh.png"))
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
 
 
 def test_main_job_end_to_end(tmp_path, capsys):
@@ -100,6 +113,16 @@ def test_main_job_end_to_end(tmp_path, capsys):
     assert code == 0
     out = capsys.readouterr().out
     assert "2-fold stratified CV accuracy" in out and "confusion matrix" in out
+    # The scores of the default pipeline's 1-NN on the same folds, by scikit-learn.
+    meshes, y = make_shapes(n_per_class=4, random_state=0, return_X_y=True)
+    fields = LaplacianEigenTransformer().fit_transform(meshes)
+    matrix = DiagramDistance().fit_transform(LowerStarPersistence().fit_transform(fields))
+    knn = KNeighborsClassifier(n_neighbors=1, metric="precomputed")
+    scores = cross_val_score(knn, matrix, y, cv=StratifiedKFold(2, shuffle=True, random_state=0))
+    assert (
+        f"accuracy: {scores.mean():.3f} (+/- {scores.std():.3f}; "
+        f"folds {scores[0]:.2f}, {scores[1]:.2f})"
+    ) in out
     assert "time per stage" in out
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "diagrams.png",

@@ -1,13 +1,15 @@
 """DiagramDistance: matrices, the combination rule, backends, immutability, estimator API."""
 
-import pickle
-
 import numpy as np
 import pytest
 from joblib import parallel_backend
-from sklearn.base import clone
 
-from sklearn_meshph import DiagramDistance, bottleneck_distance, wasserstein_distance
+from sklearn_meshph import (
+    DiagramDistance,
+    bottleneck_distance,
+    pairwise_diagram_distances,
+    wasserstein_distance,
+)
 
 
 def random_diagrams(n, seed=0, parts=None):
@@ -93,14 +95,15 @@ def test_mismatched_samples_are_rejected():
         DiagramDistance().fit([np.zeros((1, 2)), np.array([[np.nan, 1.0]])])
 
 
-def test_clone_params_and_pickle():
+def test_clone_params_and_pickle(estimator_round_trip):
     est = DiagramDistance(metric="wasserstein", order=1.0, n_jobs=2)
-    assert clone(est).get_params() == est.get_params()
     diagrams = random_diagrams(5)
-    fitted = est.fit(diagrams)
-    restored = pickle.loads(pickle.dumps(fitted))
-    np.testing.assert_array_equal(restored.transform(diagrams), fitted.transform(diagrams))
-    with pytest.raises(ValueError):
+    matrix = estimator_round_trip(
+        est, diagrams, {"metric": "bottleneck", "order": 3.0}, fit_X=diagrams[:3]
+    )
+    expected = [[wasserstein_distance(a, b, order=1.0) for b in diagrams[:3]] for a in diagrams]
+    np.testing.assert_allclose(matrix, expected, rtol=1e-12)
+    with pytest.raises(ValueError, match="metric"):
         DiagramDistance(metric="cosine").fit(diagrams)
 
 
@@ -128,20 +131,28 @@ def test_identical_on_a_dask_cluster():
     assert len(remote_diagrams) == len(meshes)
 
 
-def test_many_blocks_float32_and_memmap_output(tmp_path, monkeypatch):
-    from sklearn_meshph.diagrams import pairwise as distance_transformer
-
-    monkeypatch.setattr(distance_transformer, "_MAX_TASK_PAIRS", 50)  # many small blocks
+def test_many_blocks_float32_and_memmap_output(tmp_path):
+    """Rows are split into a few blocks of pairs per worker: 1, 2 and 15 workers give
+    4 to 60 blocks of 60 samples, and the same matrices in every layout."""
     diagrams = random_diagrams(60, seed=7)
-    reference = np.array([[bottleneck_distance(a, b) for b in diagrams] for a in diagrams])
-    blocked = DiagramDistance(n_jobs=2).fit_transform(diagrams)
-    np.testing.assert_array_equal(blocked, reference)
-    single = DiagramDistance(dtype="float32").fit_transform(diagrams)
-    assert single.dtype == np.float32
-    np.testing.assert_allclose(single, reference, rtol=1e-6)
     samples = [(d,) for d in diagrams]
-    out = np.lib.format.open_memmap(tmp_path / "d.npy", mode="w+", shape=(60, 60))
-    distance_transformer.pairwise_diagram_distances(samples, out=out, n_jobs=2)
-    np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), reference)
-    rectangle = DiagramDistance().fit(diagrams[:7]).transform(diagrams)
-    np.testing.assert_array_equal(rectangle, reference[:, :7])
+    reference = np.array([[bottleneck_distance(a, b) for b in diagrams] for a in diagrams])
+    for n_jobs in (1, 2, 15):
+        with parallel_backend("threading", n_jobs=n_jobs):
+            np.testing.assert_array_equal(DiagramDistance().fit_transform(diagrams), reference)
+            single = DiagramDistance(dtype="float32").fit_transform(diagrams)
+            assert single.dtype == np.float32
+            np.testing.assert_allclose(single, reference, rtol=1e-6)
+            path = tmp_path / f"{n_jobs}.npy"
+            out = np.lib.format.open_memmap(path, mode="w+", shape=(60, 60))
+            assert pairwise_diagram_distances(samples, out=out) is out
+            out.flush()
+            np.testing.assert_array_equal(np.load(path), reference)
+            rectangle = DiagramDistance().fit(diagrams[:7]).transform(diagrams)
+            np.testing.assert_array_equal(rectangle, reference[:, :7])
+            wide = pairwise_diagram_distances(diagrams[:3], samples)
+            np.testing.assert_array_equal(wide, reference[:3])
+    # Worker processes, as the default backend gives.
+    np.testing.assert_array_equal(DiagramDistance(n_jobs=2).fit_transform(diagrams), reference)
+    with pytest.raises(ValueError, match=r"out has shape \(60, 59\), expected \(60, 60\)"):
+        pairwise_diagram_distances(samples, out=np.zeros((60, 59)))

@@ -1,6 +1,5 @@
 """LaplacianEigenTransformer: invariances, determinism, caching, warnings, estimator API."""
 
-import pickle
 import warnings
 from pathlib import Path
 
@@ -9,14 +8,8 @@ import numpy as np
 import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
-from sklearn.base import clone
 
 from sklearn_meshph import LaplacianEigenTransformer, RepeatedEigenvalueWarning, ScalarField
-
-
-def ellipsoid(subdivisions=3):
-    sphere = trimesh.creation.icosphere(subdivisions)
-    return trimesh.Trimesh(sphere.vertices * [1.0, 1.5, 2.2], sphere.faces, process=False)
 
 
 def bumpy(subdivisions=3):
@@ -91,8 +84,8 @@ def test_graph_laplacian_is_not_resolution_invariant():
     assert ratio > 1.5
 
 
-def test_identical_output_for_any_n_jobs_and_runs():
-    meshes = [bumpy(2), ellipsoid(3), bumpy(3)]
+def test_identical_output_for_any_n_jobs_and_runs(make_irregular_ellipsoid):
+    meshes = [bumpy(2), make_irregular_ellipsoid(3), bumpy(3)]
     est = LaplacianEigenTransformer(eigen_index=(1, 2))
     one = est.set_params(n_jobs=1).transform(meshes)
     two = est.set_params(n_jobs=2).transform(meshes)
@@ -114,24 +107,24 @@ def test_repeated_eigenvalue_warns_with_multiplicity():
         LaplacianEigenTransformer(eigen_index=(1, 2, 3)).fit_transform([bumpy()])
 
 
-def _cached_calls(location: Path) -> int:
+def cached_calls(location: Path) -> int:
     return sum(1 for _ in location.rglob("output.pkl"))
 
 
-def test_memory_solves_each_mesh_once_across_eigen_indices(tmp_path):
-    meshes = [bumpy(2), ellipsoid(2)]
+def test_memory_solves_each_mesh_once_across_eigen_indices(tmp_path, make_irregular_ellipsoid):
+    meshes = [bumpy(2), make_irregular_ellipsoid(2)]
     memory = joblib.Memory(tmp_path, verbose=0)
     results = {}
     for index in (1, 2, 3, 4, 5):
         est = LaplacianEigenTransformer(eigen_index=index, memory=memory)
         results[index] = est.fit_transform(meshes)
-    assert _cached_calls(tmp_path) == len(meshes)
+    assert cached_calls(tmp_path) == len(meshes)
     uncached = LaplacianEigenTransformer(eigen_index=3).fit_transform(meshes)
     np.testing.assert_array_equal(results[3][1].values, uncached[1].values)
     # A changed mesh is a new cache entry.
     moved = trimesh.Trimesh(meshes[0].vertices * 1.01, meshes[0].faces, process=False)
     LaplacianEigenTransformer(memory=str(tmp_path)).fit_transform([moved])
-    assert _cached_calls(tmp_path) == len(meshes) + 1
+    assert cached_calls(tmp_path) == len(meshes) + 1
 
 
 def test_cleaned_meshes_report_their_vertex_indices():
@@ -192,17 +185,12 @@ def test_single_mesh_instead_of_a_sequence_is_refused():
         LaplacianEigenTransformer().fit_transform(bumpy(1))
 
 
-def test_clone_params_and_pickle_round_trip():
+def test_clone_params_and_pickle_round_trip(estimator_round_trip):
     est = LaplacianEigenTransformer(eigen_index=(1, 3), laplacian="graph", n_jobs=2)
-    cloned = clone(est)
-    assert cloned.get_params() == est.get_params()
-    cloned.set_params(eigen_index=2)
-    assert cloned.eigen_index == 2 and est.eigen_index == (1, 3)
-    restored = pickle.loads(pickle.dumps(est.fit([bumpy(1)])))
-    assert restored.get_params() == est.get_params()
-    a = restored.transform([bumpy(2)])[0]
-    b = est.transform([bumpy(2)])[0]
-    np.testing.assert_array_equal(a.values, b.values)
+    (field,) = estimator_round_trip(
+        est, [bumpy(2)], {"eigen_index": 2, "laplacian": "cotangent"}, fit_X=[bumpy(1)]
+    )
+    assert est.eigen_index == (1, 3) and field.values.shape == (len(bumpy(2).vertices), 2)
 
 
 def test_a_corrupted_cache_entry_is_recomputed(tmp_path):

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import trimesh
 
 from sklearn_meshph import check_mesh, clean_mesh
@@ -123,31 +124,69 @@ def test_all_degenerate_faces_raise():
         clean_mesh(vertices, np.array([[0, 1, 2]]), index=0)
 
 
-def test_compiled_duplicates_and_components_match_references():
-    """The hash table and the union-find against a set of sorted triples and SciPy."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
+def random_faces(seed, n_vertices=300, n_faces=500, n_repeats=100):
+    """Random triangles on random points, a fifth repeated with their indices permuted;
+    many share no vertex, some repeat an index."""
+    rng = np.random.default_rng(seed)
+    vertices = rng.normal(size=(n_vertices, 3))
+    faces = rng.integers(0, n_vertices, size=(n_faces, 3))
+    repeats = faces[rng.integers(0, n_faces, n_repeats)]
+    return vertices, np.vstack([faces, [rng.permutation(f) for f in repeats]])
 
-    from sklearn_meshph.mesh._geometry import first_of_duplicate_faces
-    from sklearn_meshph.mesh._graph import connected_components as vertex_components
 
-    rng = np.random.default_rng(0)
-    n = 300
-    faces = rng.integers(0, n, size=(500, 3))
-    # Repeat a fifth of the faces with their indices in another order.
-    repeats = faces[rng.integers(0, len(faces), 100)]
-    faces = np.vstack([faces, np.array([rng.permutation(f) for f in repeats])])
-    seen, expected = set(), []
+def reference_faces(vertices, faces):
+    """The first face of each set of three distinct vertices, by a set of sorted triples
+    (random points: no collinear triangle)."""
+    seen, kept = set(), []
     for face in faces:
         key = tuple(sorted(face))
-        expected.append(key not in seen)
+        if len(set(key)) == 3 and key not in seen:
+            kept.append(face)
         seen.add(key)
-    np.testing.assert_array_equal(first_of_duplicate_faces(faces), expected)
+    return np.array(kept)
 
-    faces = faces[:120]  # sparse enough for several components and lone vertices
-    count, labels = vertex_components(n, faces)
+
+def reference_components(n_vertices, faces):
+    """Components of the vertices that faces use, by SciPy: a label per face."""
+    from scipy.sparse.csgraph import connected_components
+
     edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]]])
-    graph = sp.coo_matrix((np.ones(len(edges)), edges.T), shape=(n, n))
-    ref_count, ref_labels = connected_components(graph, directed=False)
-    assert count == ref_count
-    np.testing.assert_array_equal(labels, ref_labels)  # both numbered by lowest vertex
+    graph = sp.coo_matrix((np.ones(len(edges)), edges.T), shape=(n_vertices, n_vertices))
+    _, labels = connected_components(graph, directed=False)
+    return labels[faces[:, 0]]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_duplicates_and_components_match_a_set_of_triples_and_scipy(seed):
+    """The policy's hash table and union-find against a set of sorted triples and SciPy."""
+    vertices, faces = random_faces(seed)
+    expected = reference_faces(vertices, faces)
+    assert len(expected) < len(faces) - 90  # repeats and repeated indices are dropped
+    clean = clean_mesh(vertices, faces)  # one component: every face is kept
+    assert len(np.unique(reference_components(len(vertices), expected))) == 1
+    np.testing.assert_array_equal(clean.vertex_indices[clean.faces], expected)
+    np.testing.assert_array_equal(clean.vertices, vertices[clean.vertex_indices])
+
+    # Sparse enough for several components (and lone vertices, which do not count).
+    faces = faces[:120]
+    expected = reference_faces(vertices, faces)
+    labels = reference_components(len(vertices), expected)
+    n_components = len(np.unique(labels))
+    assert n_components > 3
+    with pytest.raises(ValueError, match=f"sample 3: the mesh has {n_components} connected"):
+        clean_mesh(vertices, faces, components="error", index=3)
+    mesh = trimesh.Trimesh(vertices, expected, process=False)
+    area = np.bincount(labels, weights=mesh.area_faces)
+    largest = expected[labels == np.argmax(area)]
+    clean = clean_mesh(vertices, faces)
+    np.testing.assert_array_equal(clean.vertex_indices[clean.faces], largest)
+    np.testing.assert_array_equal(clean.vertex_indices, np.unique(largest))
+
+
+def test_equal_components_keep_the_one_with_the_lowest_vertex():
+    vertices, faces = tetrahedron()
+    twin = np.vstack([vertices + 5.0, vertices])  # the second copy uses vertices 4-7
+    faces = np.vstack([faces + 4, faces])  # ... and is listed first
+    clean = clean_mesh(twin, faces)
+    np.testing.assert_array_equal(clean.vertex_indices, [0, 1, 2, 3])
+    np.testing.assert_array_equal(clean.faces, tetrahedron()[1])

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
 from .._param_validation import Interval, Options, validate_params
+from .._threads import one_blas_thread
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked
 from ..mesh.validation import check_mesh
 from .factorization import SOLVERS, ShiftInvertOperator
@@ -79,16 +80,20 @@ def generalized_eigenpairs(
     """
     n = L.shape[0]
     mass = M.diagonal()
-    if n <= _DENSE_MAX_VERTICES or n_eigs >= n - 1:
-        values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
-        values, vectors = values[:n_eigs], vectors[:, :n_eigs]
-    else:
-        sigma = eigen_shift(L, M)
-        op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
-        v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-        values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
-        order = np.argsort(values, kind="stable")
-        values, vectors = values[order], vectors[:, order]
+    # One BLAS thread: ARPACK's and LAPACK's results then do not depend on the caller's
+    # thread count (bitwise), and ARPACK's many small BLAS calls are not slowed down by
+    # threads (several times slower on a busy machine).
+    with one_blas_thread():
+        if n <= _DENSE_MAX_VERTICES or n_eigs >= n - 1:
+            values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
+            values, vectors = values[:n_eigs], vectors[:, :n_eigs]
+        else:
+            sigma = eigen_shift(L, M)
+            op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
+            v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
+            values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
+            order = np.argsort(values, kind="stable")
+            values, vectors = values[order], vectors[:, order]
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
     values = np.maximum(values, 0.0)
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))

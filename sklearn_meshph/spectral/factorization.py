@@ -21,6 +21,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import LinearOperator, splu
 
 from .._registry import Option, Registry
+from .._threads import one_blas_thread
 from ._cholesky import SupernodalCholesky
 from ._ordering import geometric_nested_dissection
 
@@ -36,11 +37,18 @@ class SuperLUFactor:
         self.iperm = np.empty_like(perm)
         self.iperm[perm] = np.arange(len(perm))
         B = A[perm][:, perm].tocsc()
-        self.lu = splu(B, "NATURAL", diag_pivot_thresh=0.0, options=options)
+        # One BLAS thread, as the Cholesky backend: SuperLU's results otherwise depend on
+        # the caller's thread count with some BLAS builds (scipy 1.10's OpenBLAS 0.3.18).
+        with one_blas_thread():
+            self.lu = splu(B, "NATURAL", diag_pivot_thresh=0.0, options=options)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """``A^{-1} b``."""
-        return self.lu.solve(b[self.perm])[self.iperm]
+        """``A^{-1} b`` for a vector ``b`` of length n."""
+        b = np.asarray(b, dtype=np.float64)
+        if b.shape != self.perm.shape:
+            raise ValueError(f"right-hand side must have shape ({len(self.perm)},), got {b.shape}")
+        with one_blas_thread():
+            return self.lu.solve(b[self.perm])[self.iperm]
 
 
 SOLVERS = Registry(
@@ -81,6 +89,18 @@ def factorize(A: sp.spmatrix, points: np.ndarray | None = None, solver: str = "a
     """
     backend = SOLVERS[solver].value
     A = sp.csr_matrix(A, dtype=np.float64)
+    n = A.shape[0]
+    # Checked here, before the order is computed, for every backend.
+    if A.shape != (n, n):
+        raise ValueError(f"the matrix must be square, got shape {A.shape}")
+    if not np.isfinite(A.data).all():
+        raise ValueError("the matrix has a non-finite entry (NaN or inf)")
+    if points is not None:
+        points = np.asarray(points, dtype=np.float64)
+        if points.ndim != 2 or len(points) != n:
+            raise ValueError(
+                f"points must have one row per row of the matrix, ({n}, d); got {points.shape}"
+            )
     return backend(A, fill_reducing_order(A, points))
 
 
