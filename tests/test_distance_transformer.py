@@ -131,6 +131,16 @@ def test_identical_on_a_dask_cluster():
     assert len(remote_diagrams) == len(meshes)
 
 
+@pytest.mark.parametrize("backend", ["multiprocessing", "loky", "threading"])
+def test_identical_for_every_joblib_backend(backend):
+    """multiprocessing cannot hand results back one block at a time: all at once then."""
+    diagrams = random_diagrams(30, seed=8, parts=2)
+    serial = DiagramDistance(metric="wasserstein").fit_transform(diagrams)
+    with parallel_backend(backend, n_jobs=2):
+        parallel = DiagramDistance(metric="wasserstein", n_jobs=2).fit_transform(diagrams)
+    np.testing.assert_array_equal(parallel, serial)
+
+
 def test_many_blocks_float32_and_memmap_output(tmp_path):
     """Rows are split into a few blocks of pairs per worker: 1, 2 and 15 workers give
     4 to 60 blocks of 60 samples, and the same matrices in every layout."""

@@ -110,6 +110,15 @@ def pairwise_diagram_distances(
     return distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out)
 
 
+def _parallel(n_jobs) -> Parallel:
+    """Blocks come back as they finish, where the backend can (loky, threading, dask
+    with joblib >= 1.4); others (multiprocessing) return them all at once."""
+    try:
+        return Parallel(n_jobs=n_jobs, return_as="generator")
+    except ValueError:  # "Backend ... does not support return_as=generator"
+        return Parallel(n_jobs=n_jobs)
+
+
 def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out):
     """:func:`pairwise_diagram_distances` on validated samples."""
     code, order = kernel_metric(metric, order, internal_p)
@@ -125,7 +134,7 @@ def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out):
     n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
     bounds = _row_blocks(n, pairs_per_row, n_tasks)
     matrix = np.zeros((n, m), dtype=dtype) if out is None else out
-    tasks = Parallel(n_jobs=n_jobs, return_as="generator")(
+    tasks = _parallel(n_jobs)(
         delayed(_block_distances)(
             packed_left, packed_right, a, b, m, symmetric, n_parts, code, order, internal_p
         )

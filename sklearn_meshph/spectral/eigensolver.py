@@ -12,7 +12,7 @@ from numbers import Integral
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
-from scipy.sparse.linalg import eigsh
+from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
@@ -25,6 +25,8 @@ __all__ = ["fix_signs", "generalized_eigenpairs", "laplacian_eigenfunctions"]
 
 # Below this size a dense generalized eigensolver is faster and simpler than ARPACK.
 _DENSE_MAX_VERTICES = 200
+# Up to this size a dense solve (seconds) replaces an ARPACK run that did not converge.
+_DENSE_FALLBACK_VERTICES = 3000
 # Shift of shift-invert, relative to the typical eigenvalue scale trace(L)/trace(M)/n.
 _RELATIVE_SHIFT = 1e-2
 
@@ -84,16 +86,24 @@ def generalized_eigenpairs(
     # thread count (bitwise), and ARPACK's many small BLAS calls are not slowed down by
     # threads (several times slower on a busy machine).
     with one_blas_thread():
-        if n <= _DENSE_MAX_VERTICES or n_eigs >= n - 1:
-            values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
-            values, vectors = values[:n_eigs], vectors[:, :n_eigs]
-        else:
+        values = vectors = None
+        if n > _DENSE_MAX_VERTICES and n_eigs < n - 1:
             sigma = eigen_shift(L, M)
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-            values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
-            order = np.argsort(values, kind="stable")
-            values, vectors = values[order], vectors[:, order]
+            try:
+                values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
+            except ArpackNoConvergence:
+                # An eigenvalue of a multiplicity beyond the block (many triangles on
+                # one edge) can stall ARPACK; a small mesh is then solved densely.
+                if n > _DENSE_FALLBACK_VERTICES:
+                    raise
+            else:
+                order = np.argsort(values, kind="stable")
+                values, vectors = values[order], vectors[:, order]
+        if values is None:
+            values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
+            values, vectors = values[:n_eigs], vectors[:, :n_eigs]
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
     values = np.maximum(values, 0.0)
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))

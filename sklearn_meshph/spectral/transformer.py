@@ -215,10 +215,11 @@ class LaplacianEigenTransformer(SampleTransformer):
     --------
     >>> import trimesh
     >>> from sklearn_meshph import LaplacianEigenTransformer
-    >>> meshes = [trimesh.creation.capsule(height=h, radius=1.0) for h in (1.0, 2.0)]
+    >>> sphere = trimesh.creation.icosphere(3)
+    >>> meshes = [(sphere.vertices * [1.0, 1.0, c], sphere.faces) for c in (2.0, 4.0)]
     >>> fields = LaplacianEigenTransformer(eigen_index=1).fit_transform(meshes)
-    >>> [round(float(f.eigenvalues[0]), 2) for f in fields]
-    [17.46, 11.3]
+    >>> [round(float(f.eigenvalues[0]), 2) for f in fields]  # longer: lower, at unit area
+    [15.56, 8.44]
     """
 
     _sample_kind = "meshes"
