@@ -2,12 +2,13 @@
 assignment with a private diagonal column per point.
 
 Costs are computed in a scaled form, ``(ground / s)^q`` for a scale ``s`` of the pair,
-so that no order that float64 can carry underflows or overflows. First ``s`` is the
-power of two just above the largest cost of a point to the diagonal (every cost worth
-considering is then at most 2); when the optimum comes out far below 1 (a high order,
-or a distance far below the largest persistence) the pair is solved again with ``s``
-the bottleneck distance, a lower bound of every q-Wasserstein distance, so that the
-optimum is at least 1.
+so that no order that float64 can carry underflows or overflows. Orders other than 1
+and 2 use the bottleneck distance for ``s``, a lower bound of every q-Wasserstein
+distance: the optimum is then at least 1, and never lost in the rounding of the dual
+potentials. Orders 1 and 2 use the power of two just above the largest cost of a point
+to the diagonal (every cost worth considering is then at most 2, and scaling by a power
+of two is exact, so they give the bits of an unscaled computation), and fall back to the
+bottleneck scale when the optimum comes out below 1e-250.
 """
 
 from __future__ import annotations
@@ -343,15 +344,23 @@ def transport(a, b, order, internal_p):
     if largest == 0.0:  # every point on the diagonal
         return 0.0, 0.0, np.full(len(a), DIAGONAL, np.int64)
     scale = power_of_two_above(largest)
-    total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, np.inf)
-    if total >= _TINY:
-        return scale, total, partner
+    if order == 1.0 or order == 2.0:
+        # Orders 1 and 2 keep the bits of the unscaled computation (scaling by a power
+        # of two is exact) unless the optimum underflows.
+        total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, np.inf)
+        if total >= _TINY:
+            return scale, total, partner
+    # Other orders are always solved at the scale of the bottleneck distance: at the
+    # scale of the largest persistence their optimum can be far below the costs that
+    # the dual potentials carry (a distance far below the largest persistence, from
+    # order ~10 on), lost in rounding, and a matching that is not optimal comes out.
     # The optimum is at least (bottleneck / s)^order; at s = the L-infinity bottleneck
     # distance it is at least 1 and at most n + m (internal_p = inf) or that times
     # 2^(order / internal_p), which callers keep within float64.
-    scale = bottleneck_finite(a, b)
-    if scale == 0.0:
-        return 0.0, 0.0, partner
+    bottleneck = bottleneck_finite(a, b)
+    if bottleneck == 0.0:  # a matching of cost 0, found at any order
+        return 0.0, 0.0, _optimal_transport(a, b, 1.0, internal_p, 1.0 / scale, np.inf)[1]
+    scale = bottleneck
     bound = (len(a) + len(b)) * 2.0 ** (order / internal_p if internal_p != np.inf else 0.0)
     total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, 4.0 * bound)
     return scale, total, partner

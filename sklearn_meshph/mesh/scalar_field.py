@@ -11,6 +11,12 @@ from .validation import check_faces, check_values, check_vertices
 __all__ = ["ScalarField"]
 
 
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = array.copy()
+    array.flags.writeable = False
+    return array
+
+
 @dataclass(frozen=True, eq=False)
 class ScalarField:
     """One or several functions on the vertices of a triangle mesh.
@@ -57,6 +63,10 @@ class ScalarField:
         vertices = check_vertices(self.vertices, "ScalarField")
         faces = check_faces(self.faces, len(vertices), "ScalarField")
         values = check_values(self.values, len(vertices), "ScalarField")
+        # Own read-only copies: the validation above must still hold when the compiled
+        # stages read the field, whatever the caller does to its arrays afterwards (an
+        # index set out of range in place would be read out of bounds).
+        vertices, faces, values = (_frozen(array) for array in (vertices, faces, values))
         object.__setattr__(self, "vertices", vertices)
         object.__setattr__(self, "faces", faces)
         object.__setattr__(self, "values", values)

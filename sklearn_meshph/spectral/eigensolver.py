@@ -12,7 +12,7 @@ from numbers import Integral
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
-from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+from scipy.sparse.linalg import ArpackError, eigsh
 
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
@@ -91,16 +91,35 @@ def generalized_eigenpairs(
             sigma = eigen_shift(L, M)
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-            try:
-                values, vectors = eigsh(L, k=n_eigs, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0)
-            except ArpackNoConvergence:
-                # An eigenvalue of a multiplicity beyond the block (many triangles on
-                # one edge) can stall ARPACK; a small mesh is then solved densely.
-                if n > _DENSE_FALLBACK_VERTICES:
-                    raise
-            else:
-                order = np.argsort(values, kind="stable")
-                values, vectors = values[order], vectors[:, order]
+            # An eigenvalue of a multiplicity beyond the block (many triangles on one
+            # edge) can stall ARPACK: no convergence, or error 3 ("no shifts could be
+            # applied"). A larger Krylov space resolves it; failing that, a small mesh
+            # is solved densely.
+            ncv = min(n, max(2 * n_eigs + 1, 20))
+            for attempt in range(3):
+                try:
+                    values, vectors = eigsh(
+                        L,
+                        k=n_eigs,
+                        M=M,
+                        sigma=sigma,
+                        which="LM",
+                        OPinv=op,
+                        v0=v0,
+                        ncv=ncv,
+                        maxiter=max(1000, 10 * n_eigs),
+                    )
+                except ArpackError:  # ArpackNoConvergence is one
+                    values = vectors = None
+                    if ncv == n or attempt == 2:
+                        if n > _DENSE_FALLBACK_VERTICES:
+                            raise
+                        break
+                    ncv = min(n, 2 * ncv + 20)
+                else:
+                    order = np.argsort(values, kind="stable")
+                    values, vectors = values[order], vectors[:, order]
+                    break
         if values is None:
             values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
             values, vectors = values[:n_eigs], vectors[:, :n_eigs]
