@@ -12,7 +12,7 @@ import numba
 import numpy as np
 
 from ._bottleneck import bottleneck_finite
-from ._wasserstein import power_of_two_above, wasserstein_scaled
+from ._wasserstein import power, power_of_two_above, wasserstein_scaled
 
 __all__ = ["pack", "pair_distances"]
 
@@ -26,8 +26,8 @@ def _add_scaled(scale, total, s, t, order):
     if s == 0.0 or t == 0.0:
         return scale, total
     if s > scale:
-        return s, total * (scale / s) ** order + t
-    return scale, total + t * (s / scale) ** order
+        return s, total * power(scale / s, order) + t
+    return scale, total + t * power(s / scale, order)
 
 
 @numba.njit(cache=True)
@@ -55,7 +55,7 @@ def _sample_distance(pa, oa, ea, eoa, ia, pb, ob, eb, eob, ib, n_parts, metric, 
                 gap = abs(essential_a[k] - essential_b[k])
                 if gap > 0.0:
                     s = power_of_two_above(gap)
-                    scale, total = _add_scaled(scale, total, s, (gap / s) ** order, order)
+                    scale, total = _add_scaled(scale, total, s, power(gap / s, order), order)
     if metric == BOTTLENECK:
         return largest
     return scale * total ** (1.0 / order)
