@@ -61,10 +61,7 @@ def _ground(dx, dy, internal_p):
 
 @numba.njit(cache=True, inline="always")
 def _cost(ground, order, inv_scale, cap):
-    """``(ground / scale)^order``, capped unless ``cap`` is None (a compile-time branch):
-    a capped cost is never part of an optimum."""
-    if cap is None:
-        return power(ground * inv_scale, order)
+    """``(ground / scale)^order``, capped: a capped cost is never part of an optimum."""
     return min(power(ground * inv_scale, order), cap)
 
 
@@ -351,7 +348,7 @@ def transport(a, b, order, internal_p):
     if order == 1.0 or order == 2.0:
         # Orders 1 and 2 keep the bits of the unscaled computation (scaling by a power
         # of two is exact) unless the optimum underflows.
-        total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, None)
+        total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, np.inf)
         if total >= _TINY:
             return scale, total, partner
     # Other orders are always solved at the scale of the bottleneck distance: at the
@@ -363,7 +360,7 @@ def transport(a, b, order, internal_p):
     # 2^(order / internal_p), which callers keep within float64.
     bottleneck = bottleneck_finite(a, b)
     if bottleneck == 0.0:  # a matching of cost 0, found at any order
-        return 0.0, 0.0, _optimal_transport(a, b, 1.0, internal_p, 1.0 / scale, None)[1]
+        return 0.0, 0.0, _optimal_transport(a, b, 1.0, internal_p, 1.0 / scale, np.inf)[1]
     scale = bottleneck
     bound = (len(a) + len(b)) * 2.0 ** (order / internal_p if internal_p != np.inf else 0.0)
     total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, 4.0 * bound)
