@@ -75,6 +75,24 @@ def test_load_mesh_folder_errors(tmp_path):
         load_mesh_folder(tmp_path)
 
 
+def test_a_broken_file_is_named_in_the_error(tmp_path):
+    write_folder(tmp_path)
+    (tmp_path / "box" / "c.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")  # truncated
+    with pytest.raises(ValueError, match=r"^sample 4: .*c\.off"):
+        load_mesh_folder(tmp_path)
+    assert load_mesh_folder(tmp_path, load=False).filenames[4].endswith("c.off")
+
+
+def test_described_classes_are_the_generated_ones():
+    data = make_shapes(n_per_class=1, random_state=0)
+    for name in data.target_names:
+        assert f'"{name}"' in data.DESCR
+    for name in ("rod", "tetrapod"):
+        assert name not in data.DESCR
+        with pytest.raises(ValueError, match="unknown classes"):
+            make_shapes(classes=(name,))
+
+
 def test_load_sumner_folder(sumner_dir):
     data = load_mesh_folder(sumner_dir, load=False)
     assert len(data.data) == 60
