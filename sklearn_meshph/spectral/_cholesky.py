@@ -31,7 +31,7 @@ from numba.extending import get_cython_function_address
 
 from .._threads import one_blas_thread
 
-__all__ = ["SupernodalCholesky"]
+__all__ = ["SupernodalCholesky", "check_square_finite"]
 
 # Relaxed amalgamation (CHOLMOD's thresholds): a supernode and its parent merge when the
 # merged panel has at most 4 columns, or at most 16 with below 80% explicit zeros, or at
@@ -483,6 +483,16 @@ def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
                     x[f + d] -= lx[row + d] * value
 
 
+def check_square_finite(A: sp.spmatrix) -> sp.csr_matrix:
+    """``A`` as a float64 CSR matrix, refusing a non-square one or a non-finite entry."""
+    A = sp.csr_matrix(A, dtype=np.float64)
+    if A.shape[0] != A.shape[1]:
+        raise ValueError(f"the matrix must be square, got shape {A.shape}")
+    if not np.isfinite(A.data).all():
+        raise ValueError("the matrix has a non-finite entry (NaN or inf)")
+    return A
+
+
 class SupernodalCholesky:
     """``A = P^T L L^T P`` for a sparse symmetric positive definite ``A``.
 
@@ -503,12 +513,8 @@ class SupernodalCholesky:
     """
 
     def __init__(self, A: sp.spmatrix, perm: np.ndarray | None = None):
-        A = sp.csr_matrix(A, dtype=np.float64)
+        A = check_square_finite(A)
         n = A.shape[0]
-        if A.shape != (n, n):
-            raise ValueError(f"the matrix must be square, got shape {A.shape}")
-        if not np.isfinite(A.data).all():
-            raise ValueError("the matrix has a non-finite entry (NaN or inf)")
         if perm is None:
             perm = np.arange(n)
         self.perm = np.ascontiguousarray(perm, dtype=np.int64)

@@ -22,7 +22,7 @@ from scipy.sparse.linalg import LinearOperator, splu
 
 from .._registry import Option, Registry
 from .._threads import one_blas_thread
-from ._cholesky import SupernodalCholesky
+from ._cholesky import SupernodalCholesky, check_square_finite
 from ._ordering import geometric_nested_dissection
 
 __all__ = ["SOLVERS", "ShiftInvertOperator", "factorize"]
@@ -88,13 +88,8 @@ def factorize(A: sp.spmatrix, points: np.ndarray | None = None, solver: str = "a
     nested-dissection order; without them reverse Cuthill-McKee is used (more fill).
     """
     backend = SOLVERS[solver].value
-    A = sp.csr_matrix(A, dtype=np.float64)
+    A = check_square_finite(A)  # here, before the order is computed, for every backend
     n = A.shape[0]
-    # Checked here, before the order is computed, for every backend.
-    if A.shape != (n, n):
-        raise ValueError(f"the matrix must be square, got shape {A.shape}")
-    if not np.isfinite(A.data).all():
-        raise ValueError("the matrix has a non-finite entry (NaN or inf)")
     if points is not None:
         points = np.asarray(points, dtype=np.float64)
         if points.ndim != 2 or len(points) != n:
