@@ -11,7 +11,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._bottleneck import bottleneck_finite
+from ._bottleneck import SMALL_PAIRS, bottleneck_finite, bottleneck_small
 from ._wasserstein import power, power_of_two_above, wasserstein_scaled
 
 __all__ = ["pack", "pair_distances"]
@@ -30,46 +30,67 @@ def _add_scaled(scale, total, s, t, order):
     return scale, total + t * power(s / scale, order)
 
 
+@numba.njit(cache=True, inline="always")
+def _part(packed, sample, n_parts, part):
+    """Finite points and sorted essential births of one diagram of a packed sample."""
+    points, offsets, births, birth_offsets = packed
+    d = sample * n_parts + part
+    return points[offsets[d] : offsets[d + 1]], births[birth_offsets[d] : birth_offsets[d + 1]]
+
+
 @numba.njit(cache=True)
-def _sample_distance(pa, oa, ea, eoa, ia, pb, ob, eb, eob, ib, n_parts, metric, order, internal_p):
-    """Distance between sample ``ia`` of one packed set and ``ib`` of another."""
+def _bottleneck_sample(left, ia, right, ib, n_parts, limit):
+    """Bottleneck distance of two packed samples: the largest over their parts.
+
+    With an int ``limit``, NaN when a part has more point pairs than that (the caller
+    then asks again with ``limit=None``). ``limit is None`` is decided when numba
+    compiles, so the threshold search is compiled only if such a pair ever comes."""
     largest = 0.0
-    scale, total = 0.0, 0.0
     for part in range(n_parts):
-        da = ia * n_parts + part
-        db = ib * n_parts + part
-        a = pa[oa[da] : oa[da + 1]]
-        b = pb[ob[db] : ob[db + 1]]
-        essential_a = ea[eoa[da] : eoa[da + 1]]
-        essential_b = eb[eob[db] : eob[db + 1]]
+        a, essential_a = _part(left, ia, n_parts, part)
+        b, essential_b = _part(right, ib, n_parts, part)
         if len(essential_a) != len(essential_b):
             return np.inf
-        if metric == BOTTLENECK:
+        if limit is None:
             largest = max(largest, bottleneck_finite(a, b))
-            for k in range(len(essential_a)):
-                largest = max(largest, abs(essential_a[k] - essential_b[k]))
+        elif len(a) * len(b) <= limit:
+            largest = max(largest, bottleneck_small(a, b))
         else:
+            return np.nan
+        for k in range(len(essential_a)):
+            largest = max(largest, abs(essential_a[k] - essential_b[k]))
+    return largest
+
+
+@numba.njit(cache=True)
+def _bottleneck_pairs(left, right, rows, cols, n_parts, limit):
+    out = np.empty(len(rows))
+    for k in range(len(rows)):
+        out[k] = _bottleneck_sample(left, rows[k], right, cols[k], n_parts, limit)
+    return out
+
+
+@numba.njit(cache=True)
+def _wasserstein_pairs(left, right, rows, cols, n_parts, order, internal_p):
+    """q-Wasserstein distances of sample pairs: the l_q norm over their parts, in the
+    scaled form ``scale * total^(1/q)``."""
+    out = np.empty(len(rows))
+    for k in range(len(rows)):
+        scale, total = 0.0, 0.0
+        for part in range(n_parts):
+            a, essential_a = _part(left, rows[k], n_parts, part)
+            b, essential_b = _part(right, cols[k], n_parts, part)
+            if len(essential_a) != len(essential_b):
+                scale, total = np.inf, 1.0
+                break
             s, t = wasserstein_scaled(a, b, order, internal_p)
             scale, total = _add_scaled(scale, total, s, t, order)
-            for k in range(len(essential_a)):
-                gap = abs(essential_a[k] - essential_b[k])
+            for e in range(len(essential_a)):
+                gap = abs(essential_a[e] - essential_b[e])
                 if gap > 0.0:
                     s = power_of_two_above(gap)
                     scale, total = _add_scaled(scale, total, s, power(gap / s, order), order)
-    if metric == BOTTLENECK:
-        return largest
-    return scale * total ** (1.0 / order)
-
-
-@numba.njit(cache=True)
-def _pairs_kernel(left, right, rows, cols, n_parts, metric, order, internal_p):
-    pa, oa, ea, eoa = left
-    pb, ob, eb, eob = right
-    out = np.empty(len(rows))
-    for k in range(len(rows)):
-        out[k] = _sample_distance(
-            pa, oa, ea, eoa, rows[k], pb, ob, eb, eob, cols[k], n_parts, metric, order, internal_p
-        )
+        out[k] = scale * total ** (1.0 / order)
     return out
 
 
@@ -95,15 +116,17 @@ def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 def pair_distances(left, right, rows, cols, n_parts, metric, order=2.0, internal_p=np.inf):
     """Distances of the sample pairs ``(rows[k], cols[k])`` of two packed sets.
 
-    ``metric`` is a kernel code, ``BOTTLENECK`` or ``WASSERSTEIN``.
+    ``metric`` is a kernel code, ``BOTTLENECK`` or ``WASSERSTEIN``. Each metric has its
+    own compiled loop, and the bottleneck threshold search is only called (and compiled)
+    for pairs of diagrams too large for the minimax algorithm: a first run compiles only
+    what it uses.
     """
-    return _pairs_kernel(
-        left,
-        right,
-        np.asarray(rows, dtype=np.int64),
-        np.asarray(cols, dtype=np.int64),
-        n_parts,
-        metric,
-        float(order),
-        float(internal_p),
-    )
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    if metric == WASSERSTEIN:
+        return _wasserstein_pairs(left, right, rows, cols, n_parts, float(order), float(internal_p))
+    out = _bottleneck_pairs(left, right, rows, cols, n_parts, SMALL_PAIRS)
+    large = np.flatnonzero(np.isnan(out))
+    if len(large):
+        out[large] = _bottleneck_pairs(left, right, rows[large], cols[large], n_parts, None)
+    return out

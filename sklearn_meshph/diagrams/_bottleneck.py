@@ -305,14 +305,22 @@ def _one_sided_bottleneck(a, b):
 
 # Below this many point pairs (300 x 300) the minimax augmenting paths beat the threshold
 # search (benchmarks/bench_distances.py; figures in docs/distances.md).
-_SMALL_PAIRS = 90_000
+SMALL_PAIRS = 90_000
+
+
+@numba.njit(cache=True)
+def bottleneck_small(a, b):
+    """Exact bottleneck distance of two finite diagrams by minimax augmenting paths, the
+    faster algorithm up to ``SMALL_PAIRS`` point pairs. Kept apart from the threshold
+    search so that a matrix of small diagrams never compiles the latter."""
+    return max(_one_sided_bottleneck(a, b), _one_sided_bottleneck(b, a))
 
 
 @numba.njit(cache=True)
 def bottleneck_finite(a, b):
-    """Exact bottleneck distance of two finite diagrams."""
-    if len(a) * len(b) <= _SMALL_PAIRS:
-        return max(_one_sided_bottleneck(a, b), _one_sided_bottleneck(b, a))
+    """Exact bottleneck distance of two finite diagrams of any size."""
+    if len(a) * len(b) <= SMALL_PAIRS:
+        return bottleneck_small(a, b)
     return _threshold_bottleneck(a, b)
 
 
