@@ -22,7 +22,14 @@ from .diagrams import (
     to_persim,
     wasserstein_distance,
 )
-from .mesh import ScalarField, check_mesh, clean_mesh
+from .mesh import (
+    CleaningReport,
+    MeshCleaningWarning,
+    ScalarField,
+    check_mesh,
+    clean_mesh,
+    weld_vertices,
+)
 from .persistence import LowerStarPersistence, lower_star_persistence
 from .spectral import (
     LaplacianEigenTransformer,
@@ -35,9 +42,11 @@ from .spectral import (
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "CleaningReport",
     "DiagramDistance",
     "LaplacianEigenTransformer",
     "LowerStarPersistence",
+    "MeshCleaningWarning",
     "RepeatedEigenvalueWarning",
     "ScalarField",
     "bottleneck_distance",
@@ -57,4 +66,5 @@ __all__ = [
     "to_gudhi",
     "to_persim",
     "wasserstein_distance",
+    "weld_vertices",
 ]

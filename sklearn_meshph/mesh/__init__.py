@@ -3,14 +3,24 @@
 - :mod:`.reading`: mesh files through trimesh, errors naming the file;
 - :mod:`.validation`: ``check_mesh`` and the checks of faces and vertex values that
   every path to compiled code goes through;
-- :mod:`.cleaning`: ``clean_mesh``, the cleaning policy;
+- :mod:`.welding`: ``weld_vertices``, one vertex per position (STL soups, OBJ seams);
+- :mod:`.cleaning`: ``clean_mesh``, the cleaning policy, and its report and warning;
 - :mod:`.scalar_field`: ``ScalarField``, the data passed between stages;
 - :mod:`._geometry`, :mod:`._graph`: compiled triangle geometry, union-find,
   connected components and the edge adjacency.
 """
 
-from .cleaning import CleanMesh, clean_mesh
+from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
+from .welding import weld_vertices
 
-__all__ = ["CleanMesh", "ScalarField", "check_mesh", "clean_mesh"]
+__all__ = [
+    "CleanMesh",
+    "CleaningReport",
+    "MeshCleaningWarning",
+    "ScalarField",
+    "check_mesh",
+    "clean_mesh",
+    "weld_vertices",
+]

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .cleaning import CleaningReport
 from .validation import check_faces, check_values, check_vertices
 
 __all__ = ["ScalarField"]
@@ -41,6 +42,14 @@ class ScalarField:
     vertex_indices : ndarray of shape (n_vertices,), optional
         Index of each vertex in the input mesh it came from, when the mesh was cleaned
         (see :func:`sklearn_meshph.clean_mesh`). ``None`` means the identity.
+    input_to_kept : ndarray of shape (n_input_vertices,), optional
+        For each vertex of the input mesh, the index of the vertex it became here
+        (vertices welded together share one), or -1 if cleaning dropped it:
+        ``values[input_to_kept]`` gives a value per input vertex (meaningless where the
+        map is -1). ``None`` means the identity.
+    cleaning : CleaningReport, optional
+        What cleaning dropped from the input mesh, and why; ``None`` when nothing was
+        dropped (welding alone is not dropping).
 
     Examples
     --------
@@ -58,6 +67,8 @@ class ScalarField:
     values: np.ndarray
     eigenvalues: np.ndarray | None = None
     vertex_indices: np.ndarray | None = field(default=None, repr=False)
+    input_to_kept: np.ndarray | None = field(default=None, repr=False)
+    cleaning: CleaningReport | None = field(default=None, repr=False)
 
     def __post_init__(self):
         vertices = check_vertices(self.vertices, "ScalarField")
@@ -76,6 +87,17 @@ class ScalarField:
             )
         if self.vertex_indices is not None:
             object.__setattr__(self, "vertex_indices", np.asarray(self.vertex_indices))
+        if self.input_to_kept is not None:
+            input_to_kept = np.asarray(self.input_to_kept, dtype=np.int64)
+            if input_to_kept.ndim != 1 or (
+                len(input_to_kept)
+                and (input_to_kept.min() < -1 or input_to_kept.max() >= len(vertices))
+            ):
+                raise ValueError(
+                    "ScalarField: input_to_kept must be a 1-D array of indices into the "
+                    f"{len(vertices)} vertices or -1"
+                )
+            object.__setattr__(self, "input_to_kept", _frozen(input_to_kept))
 
     @property
     def n_vertices(self) -> int:

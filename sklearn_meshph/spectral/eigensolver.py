@@ -16,7 +16,7 @@ from scipy.sparse.linalg import ArpackError, eigsh
 
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
-from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked
+from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
 from ..mesh.validation import check_mesh
 from .factorization import SOLVERS, ShiftInvertOperator
 from .laplacians import LAPLACIANS
@@ -134,6 +134,7 @@ def generalized_eigenpairs(
         "n_eigs": [Interval(Integral, 1, None, closed="left")],
         "laplacian": [Options(LAPLACIANS)],
         "components": [Options(COMPONENT_POLICIES)],
+        "weld": ["boolean"],
         "random_state": [Interval(Integral, 0, None, closed="left")],
         "solver": [Options(SOLVERS)],
     }
@@ -144,6 +145,7 @@ def laplacian_eigenfunctions(
     laplacian: str = "cotangent",
     *,
     components: str = "largest",
+    weld: bool = True,
     random_state: int = 0,
     solver: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -164,6 +166,9 @@ def laplacian_eigenfunctions(
         lumped mass; ``"graph"`` uses the graph Laplacian and ``M = I``.
     components : {"largest", "error"}, default="largest"
         Connected-component policy of :func:`clean_mesh`.
+    weld : bool, default=True
+        Weld coincident vertices first (see :func:`clean_mesh`); ``False`` keeps the
+        vertices as given.
     random_state : int, default=0
         Seed of ARPACK's start vector.
     solver : {"auto", "cholesky", "superlu"}, default="auto"
@@ -179,6 +184,11 @@ def laplacian_eigenfunctions(
         norm for ``"graph"``; signs follow the rule of
         :class:`LaplacianEigenTransformer`.
 
+    Warns
+    -----
+    MeshCleaningWarning
+        When cleaning drops more than 1% of the vertices or of the area.
+
     Examples
     --------
     >>> import trimesh
@@ -189,7 +199,8 @@ def laplacian_eigenfunctions(
     [0.0, 2.0, 2.0, 2.0, 6.0]
     """
     vertices, faces = check_mesh(mesh)
-    clean = clean_checked(vertices, faces, components=components, index=None)
+    clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
+    warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
     n = len(clean.vertices)
     if n_eigs > n:
         raise ValueError(f"n_eigs must be between 1 and {n} (the kept vertices), got {n_eigs}")

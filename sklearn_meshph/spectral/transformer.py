@@ -14,7 +14,7 @@ from sklearn.utils.validation import check_memory
 from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
 from .._threads import one_blas_thread
-from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked
+from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
 from ..mesh.validation import check_mesh, where
 from .eigensolver import generalized_eigenpairs
@@ -39,7 +39,16 @@ class RepeatedEigenvalueWarning(UserWarning):
 
 
 def mesh_eigenpairs(
-    vertices, faces, laplacian, normalization, components, n_eigs, seed, index, solver="auto"
+    vertices,
+    faces,
+    laplacian,
+    normalization,
+    components,
+    n_eigs,
+    seed,
+    index,
+    solver="auto",
+    weld=True,
 ):
     """Clean one validated mesh and solve its eigenpairs: the unit ``memory`` caches.
 
@@ -49,7 +58,7 @@ def mesh_eigenpairs(
     mesh scaled to unit area) and the graph Laplacian gets ``M = I / n``, so that
     eigenvectors have unit mean square whatever the scale and the vertex count.
     """
-    clean = clean_checked(vertices, faces, components=components, index=index)
+    clean = clean_checked(vertices, faces, components=components, index=index, weld=weld)
     L, M = LAPLACIANS[laplacian].value(clean.vertices, clean.faces)
     if normalization == "area":
         M = M / M.diagonal().sum()
@@ -104,13 +113,16 @@ def _eigen_one(mesh, index, *, indices, settings, seed, memory):
                 seed,
                 index,
                 settings["solver"],
+                settings["weld"],
             )
             n = len(clean.vertices)
             if n_eigs >= min(n, limit) or not _reaches_end(values, indices):
                 break
             n_eigs = min(n_eigs + _EIGS_BLOCK, limit)
     complete = len(values) == n
-    return clean, values, vectors, complete, None if n == len(vertices) else clean.vertex_indices
+    # The cleaning report travels back with the results: the parent warns, not the
+    # worker, whose warnings joblib would not show.
+    return clean, values, vectors, complete
 
 
 def _warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -> None:
@@ -166,7 +178,13 @@ class LaplacianEigenTransformer(SampleTransformer):
     components : {"largest", "error"}, default="largest"
         A mesh of several connected components keeps only the component of largest
         area (``"largest"``) or raises (``"error"``). See :func:`clean_mesh` for the
-        whole cleaning policy.
+        whole cleaning policy. Cleaning that drops more than 1% of a mesh's vertices or
+        area emits a :class:`MeshCleaningWarning` naming the sample (and its file).
+    weld : bool, default=True
+        Weld vertices at the same position (within ``1e-10`` times the bounding-box
+        diagonal) before cleaning, so that STL triangle soups and OBJ files split along
+        UV seams become connected surfaces; ``False`` keeps the vertices as given. A
+        mesh without coincident vertices is unchanged either way.
     memory : str, joblib.Memory or None, default=None
         Caches each mesh's eigensolve, keyed on the cleaned mesh's content and the
         solver settings but not on ``eigen_index``: a grid search over indices below 6
@@ -228,6 +246,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "laplacian": [Options(LAPLACIANS)],
         "normalization": [Options(("area", "none"))],
         "components": [Options(COMPONENT_POLICIES)],
+        "weld": ["boolean"],
         "memory": [None, str, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
         "random_state": ["random_state"],
@@ -240,6 +259,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         laplacian="cotangent",
         normalization="area",
         components="largest",
+        weld=True,
         memory=None,
         n_jobs=None,
         random_state=0,
@@ -249,6 +269,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         self.laplacian = laplacian
         self.normalization = normalization
         self.components = components
+        self.weld = weld
         self.memory = memory
         self.n_jobs = n_jobs
         self.random_state = random_state
@@ -284,7 +305,16 @@ class LaplacianEigenTransformer(SampleTransformer):
         fields : list of ScalarField
             One per mesh, on its cleaned vertex set; ``values`` has shape
             (n_vertices,) for an int ``eigen_index`` and (n_vertices, k) for a tuple of
-            k indices, and ``eigenvalues`` the matching eigenvalues.
+            k indices, and ``eigenvalues`` the matching eigenvalues. When cleaning
+            changed the vertex set, ``vertex_indices`` and ``input_to_kept`` map it to
+            the input's vertices and back; ``cleaning`` reports what was dropped.
+
+        Warns
+        -----
+        MeshCleaningWarning
+            When cleaning drops more than 1% of a mesh's vertices or area.
+        RepeatedEigenvalueWarning
+            When a requested eigenvalue is repeated.
         """
         self._check_params()
         meshes = self._check_samples(X)
@@ -302,6 +332,7 @@ class LaplacianEigenTransformer(SampleTransformer):
             "normalization": self.normalization,
             "components": self.components,
             "solver": self.solver,
+            "weld": self.weld,
         }
         # Held for the whole parallel call: threads of a threading backend then share
         # one limit instead of setting and restoring it under each other's feet.
@@ -317,20 +348,25 @@ class LaplacianEigenTransformer(SampleTransformer):
             results[i] = result
         fields = []
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
-        for i, (clean, values, vectors, complete, vertex_indices) in enumerate(results):
+        for i, (clean, values, vectors, complete) in enumerate(results):
             if max(indices) >= len(values):
                 raise ValueError(
                     f"sample {i}: eigen_index {max(indices)} needs at least "
                     f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
                 )
             _warn_if_repeated(values, indices, i, complete)
+            report = clean.report
+            warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
+            identity = len(clean.vertices) == report.n_input_vertices
             fields.append(
                 ScalarField(
                     vertices=clean.vertices,
                     faces=clean.faces,
                     values=vectors[:, column],
                     eigenvalues=values[column],
-                    vertex_indices=vertex_indices,
+                    vertex_indices=None if identity else clean.vertex_indices,
+                    input_to_kept=None if identity else clean.input_to_kept,
+                    cleaning=report if report.dropped else None,
                 )
             )
         return fields
