@@ -1,11 +1,24 @@
-"""Progress bars for long work: tqdm when it is installed (the ``progress`` extra),
-silence otherwise, and silence whenever ``verbose`` is 0."""
+"""Progress for long work: joblib tasks returned as they finish, and tqdm bars when
+tqdm is installed (the ``progress`` extra), silence otherwise and whenever ``verbose``
+is 0."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-__all__ = ["track"]
+from joblib import Parallel
+
+__all__ = ["parallel", "track"]
+
+
+def parallel(n_jobs) -> Parallel:
+    """A joblib ``Parallel`` returning results in order as they finish, where the backend
+    can (loky, threading, dask with joblib >= 1.4); others (multiprocessing) return
+    them all at once."""
+    try:
+        return Parallel(n_jobs=n_jobs, return_as="generator")
+    except ValueError:  # "Backend ... does not support return_as=generator"
+        return Parallel(n_jobs=n_jobs)
 
 
 def track(items: Iterable, *, total: int, desc: str, verbose: int) -> Iterator:

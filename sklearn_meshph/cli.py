@@ -4,11 +4,37 @@ shapes) end to end.
 Run ``python -m sklearn_meshph --help`` (or the ``sklearn-meshph`` console script). The
 choices of ``--laplacian``, ``--filtration`` and ``--metric`` come from the registries
 of the stages.
+
+Files written to ``--output`` (created if needed; the data files also with
+``--no-plots``):
+
+- ``distances.npy``: the full ``(n, n)`` float64 distance matrix between the samples
+  (``numpy.load``); row and column ``i`` are sample ``i``.
+- ``diagrams.npz``: the persistence diagrams (``numpy.load``): ``sample_<i>_diagram_<k>``
+  is diagram ``k`` of sample ``i``, an ``(m, 2)`` float64 array of (birth, death) rows
+  (death ``inf`` for essential classes); ``filenames`` (the mesh file of each sample,
+  or ``synthetic/<class>/<i>`` for built-in shapes), ``labels`` (int class of each
+  sample), ``target_names`` (class names) and ``diagram_names`` (name of each ``k``).
+- ``predictions.csv``: one row per sample, columns ``index, file, true label,
+  predicted label, fold`` (labels are class names; ``fold`` is the 0-based
+  cross-validation fold in which the sample was predicted).
+- ``summary.json``: ``version`` (package), ``source``, ``settings`` (every option),
+  ``n_samples``, ``class_names``, ``class_counts``, ``accuracy`` (``per_fold`` list and
+  ``mean``, ``std``), ``timings`` (seconds per stage), ``warnings`` (numbers of meshes
+  with a repeated eigenvalue or cleaned) and ``files`` (names of the files written).
+- Pictures, unless ``--no-plots``: ``tsne.png``, ``diagrams.png``, ``eigenfunctions.png``.
+
+Exit status: 0 on success; 2 for a usage error (bad option, missing folder, folder
+without meshes, a class smaller than ``--folds``), reported on one ``error:`` line
+before any mesh is loaded; 1 when a mesh cannot be processed (the line names its file).
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import json
+import re
 import sys
 import time
 import warnings
@@ -19,10 +45,28 @@ from sklearn.metrics import accuracy_score, confusion_matrix
 from sklearn.model_selection import StratifiedKFold
 from sklearn.neighbors import KNeighborsClassifier
 
-from .datasets import load_mesh_folder, make_shapes
+from .datasets import MESH_EXTENSIONS, load_mesh_folder, make_shapes
 from .diagrams import METRICS, DiagramDistance
+from .mesh import MeshCleaningWarning
 from .persistence import FILTRATIONS, LowerStarPersistence
 from .spectral import LAPLACIANS, LaplacianEigenTransformer, RepeatedEigenvalueWarning
+
+_DATA_FILES = ("distances.npy", "diagrams.npz", "predictions.csv", "summary.json")
+_MAX_WIDTH = 100
+
+_EPILOG = """\
+files written to --output (created if needed; also with --no-plots):
+  distances.npy    full (n, n) distance matrix (numpy.load)
+  diagrams.npz     sample_<i>_diagram_<k>: (m, 2) (birth, death) arrays, death inf for
+                   essential classes; filenames, labels, target_names, diagram_names
+  predictions.csv  columns: index, file, true label, predicted label, fold
+  summary.json     version, source, settings, n_samples, class_names, class_counts,
+                   accuracy (per_fold, mean, std), timings (s), warnings, files
+  tsne.png, diagrams.png, eigenfunctions.png   unless --no-plots
+
+exit status: 0 success; 2 usage error (bad option, missing or empty folder, a class
+smaller than --folds), checked before loading; 1 a mesh that cannot be processed.
+"""
 
 
 def _parse_index(text: str) -> int | tuple[int, ...]:
@@ -36,9 +80,22 @@ def _parse_index(text: str) -> int | tuple[int, ...]:
     return values[0] if len(values) == 1 else values
 
 
+def _parse_extensions(text: str) -> tuple[str, ...]:
+    parts = [p.strip().lower() for p in text.split(",") if p.strip()]
+    if not parts:
+        raise argparse.ArgumentTypeError(f"expected a comma list of file endings, got {text!r}")
+    return tuple(p if p.startswith(".") else "." + p for p in parts)
+
+
 def _add_option(parser, flag, registry, default):
     """An option whose choices and help come from a stage's registry."""
     parser.add_argument(flag, choices=registry.names, default=default, help=registry.help())
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -49,15 +106,24 @@ def build_parser() -> argparse.ArgumentParser:
             "(Zhang, Liu, Rosen & Hajij): eigenfunction per mesh -> lower-star persistence "
             "diagrams -> bottleneck/Wasserstein distances -> k-NN, scored by stratified "
             "cross-validation. Prints accuracy, a confusion matrix and the time per stage, "
-            "and writes a t-SNE embedding, example diagrams and an eigenfunction as PNGs."
+            "writes the distances, diagrams, predictions and a summary, and a t-SNE "
+            "embedding, example diagrams and eigenfunctions as PNGs."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        epilog=_EPILOG,
+        formatter_class=_HelpFormatter,
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     parser.add_argument(
         "path",
         nargs="?",
         help="mesh folder with one sub-folder per class (like sklearn's load_files); "
         "without it, a built-in synthetic shape set (make_shapes) is generated",
+    )
+    parser.add_argument(
+        "--extensions",
+        type=_parse_extensions,
+        default=MESH_EXTENSIONS,
+        help="comma list of file endings that count as meshes in PATH (case-insensitive)",
     )
     parser.add_argument(
         "--eigen-index",
@@ -74,8 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_option(parser, "--filtration", FILTRATIONS, LowerStarPersistence().filtration)
     _add_option(parser, "--metric", METRICS, DiagramDistance().metric)
-    parser.add_argument("--order", type=float, default=2.0, help="Wasserstein order q")
-    parser.add_argument("--folds", type=int, default=5, help="stratified CV folds")
+    parser.add_argument("--order", type=float, default=2.0, help="Wasserstein order q (>= 1)")
+    parser.add_argument("--folds", type=int, default=5, help="stratified CV folds (>= 2)")
     parser.add_argument("--neighbors", type=int, default=1, help="k of the k-NN classifier")
     parser.add_argument(
         "--n-jobs", type=int, default=-1, help="parallel jobs (joblib); -1 = all cores"
@@ -83,93 +149,212 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--n-per-class", type=int, default=12, help="synthetic meshes per class (no PATH)"
     )
-    parser.add_argument("--random-state", type=int, default=0)
     parser.add_argument(
-        "--output", type=Path, default=Path("meshph-output"), help="folder for the pictures"
+        "--random-state",
+        type=int,
+        default=0,
+        help="seed of the eigensolver, the synthetic shapes, the CV folds and t-SNE",
     )
-    parser.add_argument("--no-plots", action="store_true", help="skip the pictures")
+    parser.add_argument(
+        "--output",
+        type=Path,
+        default=Path("meshph-output"),
+        help="folder for the result files and pictures (created)",
+    )
+    parser.add_argument(
+        "--no-plots", action="store_true", help="skip the pictures (data files are written)"
+    )
+    parser.add_argument(
+        "--verbose",
+        type=int,
+        default=1,
+        help="progress bars on stderr per stage (needs tqdm, the 'progress' extra); 0 = none",
+    )
     return parser
 
 
-class _Progress:
-    """One status line on stderr, rewritten in place."""
-
-    def __init__(self, label: str, total: int):
-        self.label, self.total, self.start = label, total, time.perf_counter()
-        self.update(0)
-
-    def update(self, done: int) -> None:
-        if not sys.stderr.isatty() and done < self.total:
-            return
-        width = 30
-        filled = int(width * done / max(self.total, 1))
-        elapsed = time.perf_counter() - self.start
-        sys.stderr.write(
-            f"\r  {self.label:<12} [{'#' * filled}{'.' * (width - filled)}] "
-            f"{done}/{self.total}  {elapsed:6.1f} s"
-        )
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        sys.stderr.write("\n")
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Defaults in the help, and the epilog's table kept as written."""
 
 
-def _chunks(n: int, n_chunks: int):
-    bounds = np.linspace(0, n, min(n, n_chunks) + 1).astype(int)
-    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+class _UsageError(Exception):
+    """A problem with the options or the folder: one line, exit status 2."""
 
 
-def compute_fields(meshes, eigen: LaplacianEigenTransformer):
-    progress = _Progress("eigensolves", len(meshes))
-    fields = []
+# Data --------------------------------------------------------------------------------
+
+
+class _Names:
+    """Maps ``sample K`` in messages to the sample's file, for data from a folder."""
+
+    def __init__(self, filenames=None, root=None):
+        self.files = None
+        if filenames is not None:
+            root = Path(root)
+            self.files = []
+            for f in filenames:
+                try:
+                    self.files.append(Path(f).relative_to(root).as_posix())
+                except ValueError:
+                    self.files.append(str(f))
+
+    def name(self, index: int) -> str:
+        if self.files is None or not 0 <= index < len(self.files):
+            return f"sample {index}"
+        return f"sample {index} ({self.files[index]})"
+
+    def message(self, text: str) -> str:
+        """``text`` on one line, with each ``sample K`` naming its file."""
+        text = " ".join(str(text).split())
+        if self.files is None:
+            return text
+        return re.sub(r"\bsample (\d+)\b", lambda m: self.name(int(m.group(1))), text)
+
+
+def _sample_indices(caught, category) -> list[int]:
+    """Distinct samples named by the caught warnings of ``category``."""
+    found = set()
+    for w in caught:
+        if category is not None and issubclass(w.category, category):
+            match = re.search(r"\bsample (\d+)\b", str(w.message))
+            found.add(int(match.group(1)) if match else -1)
+    return sorted(found)
+
+
+def _note(indices, what: str, names: _Names) -> int:
+    """Print one note line per kind of warning; the number of distinct meshes."""
+    known = [i for i in indices if i >= 0]
+    if not indices:
+        return 0
+    print(f"  note: {len(indices)} mesh(es) {what}" + (":" if known else ""))
+    for i in known[:5]:
+        print(f"    {names.name(i)}")
+    if len(known) > 5:
+        print(f"    ... and {len(known) - 5} more")
+    return len(indices)
+
+
+def compute_fields(meshes, eigen: LaplacianEigenTransformer, names: _Names | None = None):
+    """Eigenfunctions of all the meshes in one call (messages count in the whole
+    collection); returns the fields and the numbers of meshes warned about."""
+    names = names or _Names()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RepeatedEigenvalueWarning)
-        for a, b in _chunks(len(meshes), 10):
-            chunk = eigen.transform(meshes[a:b])
-            fields.extend(chunk)
-            progress.update(b)
-    progress.close()
-    repeated = sum(issubclass(w.category, RepeatedEigenvalueWarning) for w in caught)
-    if repeated:
-        print(f"  note: {repeated} mesh(es) have a repeated eigenvalue at the requested index")
-    return fields
+        warnings.simplefilter("always", MeshCleaningWarning)
+        fields = eigen.transform(meshes)
+    counts = {
+        "repeated_eigenvalue": _note(
+            _sample_indices(caught, RepeatedEigenvalueWarning),
+            "have a repeated eigenvalue at the requested index",
+            names,
+        ),
+        "cleaned": _note(_sample_indices(caught, MeshCleaningWarning), "were cleaned", names),
+    }
+    for w in caught:  # others: shown once each, as Python would
+        if not issubclass(w.category, (RepeatedEigenvalueWarning, MeshCleaningWarning)):
+            print(f"warning: {names.message(w.message)}", file=sys.stderr)
+    return fields, counts
 
 
 def compute_distances(diagrams, distance: DiagramDistance) -> np.ndarray:
-    """The symmetric distance matrix, by blocks of rows against the rows below them."""
-    n = len(diagrams)
-    matrix = np.zeros((n, n))
-    blocks = _chunks(n, 10)
-    progress = _Progress("distances", n)
-    for a, b in blocks:
-        block = distance.fit(diagrams[a:]).transform(diagrams[a:b])
-        matrix[a:b, a:] = block
-        matrix[a:, a:b] = block.T
-        progress.update(b)
-    progress.close()
-    return matrix
+    """The symmetric distance matrix, each unordered pair computed once."""
+    return np.asarray(distance.fit_transform(diagrams), dtype=float)
 
 
 def cross_validate(matrix, y, folds, neighbors, random_state):
+    """Scores per fold, the prediction of each sample and the fold it was tested in."""
     cv = StratifiedKFold(n_splits=folds, shuffle=True, random_state=random_state)
     predicted = np.empty_like(y)
+    fold_of = np.empty(len(y), dtype=int)
     scores = []
-    for train, test in cv.split(matrix, y):
+    for k, (train, test) in enumerate(cv.split(matrix, y)):
         knn = KNeighborsClassifier(n_neighbors=neighbors, metric="precomputed")
-        knn.fit(matrix[np.ix_(train, train)], y[train])
+        with warnings.catch_warnings():  # many classes of few meshes are still classes
+            warnings.filterwarnings("ignore", "The number of unique classes", UserWarning)
+            knn.fit(matrix[np.ix_(train, train)], y[train])
         predicted[test] = knn.predict(matrix[np.ix_(test, train)])
+        fold_of[test] = k
         scores.append(accuracy_score(y[test], predicted[test]))
-    return np.array(scores), predicted
+    return np.array(scores), predicted, fold_of
 
 
-def format_confusion(y, predicted, names) -> str:
-    matrix = confusion_matrix(y, predicted, labels=np.arange(len(names)))
-    width = max(6, *(len(n) for n in names))
-    lines = [" " * width + " | " + " ".join(f"{n[:width]:>{width}}" for n in names)]
+# Reports -----------------------------------------------------------------------------
+
+
+def format_confusion(y, predicted, names, max_width: int = _MAX_WIDTH) -> str:
+    """The confusion matrix in lines of at most ``max_width`` characters.
+
+    Up to 8 classes: the whole matrix (class names shortened to ``c0, c1, ...`` with a
+    key when they do not fit). More: the accuracy of each class, what it is most often
+    mistaken for, and the most confused pairs.
+    """
+    n = len(names)
+    matrix = confusion_matrix(y, predicted, labels=np.arange(n))
+    if n > 8:
+        return _confusion_summary(matrix, names, max_width)
+    width = max(3, len(str(matrix.max())))
+    fit = (max_width - 3) // (n + 1) - 1
+    longest = max(len(str(name)) for name in names)
+    if longest <= fit:
+        labels, key = [str(name) for name in names], []
+        width = max(width, longest)
+    else:
+        labels = [f"c{i}" for i in range(n)]
+        key = [_clip(f"  c{i} = {name}", max_width) for i, name in enumerate(names)]
+        width = max(width, *(len(label) for label in labels))
+    lines = [" " * width + " | " + " ".join(f"{label:>{width}}" for label in labels)]
     lines.append("-" * len(lines[0]))
-    for name, row in zip(names, matrix, strict=True):
-        lines.append(f"{name:>{width}} | " + " ".join(f"{v:>{width}d}" for v in row))
+    for label, row in zip(labels, matrix, strict=True):
+        lines.append(f"{label:>{width}} | " + " ".join(f"{v:>{width}d}" for v in row))
+    if key:
+        lines += ["key:"] + key
     return "\n".join(lines)
+
+
+def _clip(text: str, width: int) -> str:
+    """``text`` in at most ``width`` characters, keeping its start and its end (names
+    often differ only at the end)."""
+    if len(text) <= width:
+        return text
+    tail = (width - 3) // 2
+    return text[: width - 3 - tail] + "..." + text[len(text) - tail :]
+
+
+def _confusion_summary(matrix, names, max_width) -> str:
+    name_width = min(34, max(5, *(len(str(name)) for name in names)))
+    lines = [f"{'class':<{name_width}}  correct  accuracy  most often mistaken for"]
+    for c, name in enumerate(names):
+        row = matrix[c]
+        total = int(row.sum())
+        wrong = row.copy()
+        wrong[c] = 0
+        other = (
+            f"{_clip(str(names[int(np.argmax(wrong))]), 34)} ({int(wrong.max())})"
+            if wrong.max() > 0
+            else "-"
+        )
+        accuracy = f"{row[c] / total:.2f}" if total else "-"
+        line = (
+            f"{_clip(str(name), name_width):<{name_width}}  {f'{row[c]}/{total}':>7}  "
+            f"{accuracy:>8}  {other}"
+        )
+        lines.append(_clip(line, max_width))
+    off = matrix.copy()
+    np.fill_diagonal(off, 0)
+    pairs = [(int(off[i, j]), i, j) for i, j in zip(*np.nonzero(off), strict=True)]
+    pairs.sort(key=lambda p: (-p[0], p[1], p[2]))
+    if pairs:
+        lines.append("most confused pairs (true -> predicted: count)")
+        for count, i, j in pairs[:10]:
+            line = f"  {_clip(str(names[i]), 40)} -> {_clip(str(names[j]), 40)}: {count}"
+            lines.append(_clip(line, max_width))
+    return "\n".join(lines)
+
+
+def _wrap(text: str, width: int = _MAX_WIDTH) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width, subsequent_indent="  ", break_long_words=False))
 
 
 def _finite(matrix: np.ndarray) -> np.ndarray:
@@ -179,74 +364,136 @@ def _finite(matrix: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(matrix), matrix, cap)
 
 
-def write_pictures(output: Path, matrix, y, names, fields, diagrams, labels, random_state):
+def write_data(
+    output: Path,
+    *,
+    matrix,
+    diagrams,
+    diagram_names,
+    y,
+    predicted,
+    fold_of,
+    names,
+    filenames,
+    summary,
+) -> list[Path]:
+    """The result files (see the module docstring); returns their paths."""
+    output.mkdir(parents=True, exist_ok=True)
+    paths = [output / name for name in _DATA_FILES]
+    np.save(paths[0], np.asarray(matrix, dtype=np.float64))
+    arrays = {}
+    for i, sample in enumerate(diagrams):
+        parts = sample if isinstance(sample, tuple) else (sample,)
+        for k, d in enumerate(parts):
+            arrays[f"sample_{i}_diagram_{k}"] = np.asarray(d, dtype=np.float64).reshape(-1, 2)
+    np.savez(
+        paths[1],
+        filenames=np.asarray(filenames, dtype=str),
+        labels=np.asarray(y),
+        target_names=np.asarray(names, dtype=str),
+        diagram_names=np.asarray(diagram_names, dtype=str),
+        **arrays,
+    )
+    with open(paths[2], "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(["index", "file", "true label", "predicted label", "fold"])
+        for i in range(len(y)):
+            writer.writerow([i, filenames[i], names[y[i]], names[predicted[i]], int(fold_of[i])])
+    summary = dict(summary, files=[p.name for p in paths])
+    with open(paths[3], "w", encoding="utf-8") as f:
+        json.dump(summary, f, indent=2, default=_json_default)
+        f.write("\n")
+    return paths
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray | tuple):
+        return list(value)
+    return str(value)
+
+
+def write_pictures(
+    output: Path, matrix, y, names, fields, diagrams, labels, random_state, eigen_index=None
+):
     from sklearn.manifold import TSNE
 
     from . import plotting
 
     output.mkdir(parents=True, exist_ok=True)
     plt = plotting._pyplot()
-    perplexity = min(30.0, (len(y) - 1) / 3.0)
-    embedding = TSNE(
-        metric="precomputed", init="random", perplexity=perplexity, random_state=random_state
-    ).fit_transform(_finite(matrix))
     written = []
-    fig, ax = plt.subplots(figsize=(6, 5))
-    plotting.plot_embedding(embedding, y, names, ax=ax)
-    ax.set_title("t-SNE of the diagram distance matrix")
-    written.append(_save(fig, output / "tsne.png"))
+    n_classes = len(names)
+    if len(y) > 2:
+        perplexity = min(30.0, max(1.0, (len(y) - 1) / 3.0))
+        embedding = TSNE(
+            metric="precomputed", init="random", perplexity=perplexity, random_state=random_state
+        ).fit_transform(_finite(matrix))
+        legend_cols = 1 if n_classes <= 20 else 2
+        fig, ax = plt.subplots(figsize=(6 + 1.8 * legend_cols, 5))
+        plotting.plot_embedding(embedding, y, names, ax=ax)
+        ax.set_title("t-SNE of the diagram distance matrix")
+        written.append(_save(fig, output / "tsne.png"))
 
-    examples = [int(np.flatnonzero(y == c)[0]) for c in range(len(names))]
-    cols = min(3, len(examples))
+    examples = [int(np.flatnonzero(y == c)[0]) for c in range(n_classes)]
+    cols = min(3 if n_classes <= 9 else 5, len(examples))
     rows = -(-len(examples) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows), squeeze=False)
     for ax, i in zip(axes.ravel(), examples, strict=False):
         plotting.plot_diagram(diagrams[i], ax=ax, labels=labels)
-        ax.set_title(names[y[i]])
+        ax.set_title(_clip(str(names[y[i]]), 40))
     for ax in axes.ravel()[len(examples) :]:
         ax.set_axis_off()
     written.append(_save(fig, output / "diagrams.png"))
 
+    index = eigen_index[0] if isinstance(eigen_index, tuple) else eigen_index
+    which = f"eigenfunction {index}" if index is not None else "eigenfunction"
     fig = plt.figure(figsize=(4 * cols, 3.6 * rows))
     for k, i in enumerate(examples):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
         field = fields[i]
         values = field.columns()[0]
-        plotting.plot_mesh_function(field.vertices, field.faces, values, ax=ax)
-        ax.set_title(names[y[i]])
+        plotting.plot_mesh_function(
+            field.vertices, field.faces, values, ax=ax, colorbar_label=f"{which} value"
+        )
+        ax.set_title(f"{_clip(str(names[y[i]]), 30)}: {which}", fontsize=9)
+    shown = (
+        f" (the first of eigen_index {', '.join(map(str, eigen_index))})"
+        if isinstance(eigen_index, tuple)
+        else ""
+    )
+    fig.suptitle(f"Laplacian {which}{shown}, first sample of each class")
     written.append(_save(fig, output / "eigenfunctions.png"))
     return written
 
 
 def _save(fig, path: Path) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     fig.clf()
     return path
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``python -m sklearn_meshph`` and the ``sklearn-meshph`` script."""
-    args = build_parser().parse_args(argv)
-    timings = {}
-    start = time.perf_counter()
-    if args.path is None:
-        data = make_shapes(n_per_class=args.n_per_class, random_state=args.random_state)
-        source = f"built-in synthetic shapes (make_shapes, {args.n_per_class} per class)"
-    else:
-        data = load_mesh_folder(args.path)
-        source = str(args.path)
-    meshes, y, names = list(data.data), np.asarray(data.target), list(data.target_names)
-    timings["load"] = time.perf_counter() - start
-    counts = np.bincount(y, minlength=len(names))
-    if counts.min() < args.folds:
-        print(
-            f"error: the smallest class has {counts.min()} meshes, fewer than --folds {args.folds}",
-            file=sys.stderr,
-        )
-        return 2
-    print(f"data: {source}: {len(meshes)} meshes, {len(names)} classes ({', '.join(names)})")
+# The main job ------------------------------------------------------------------------
 
+
+def _check_options(args) -> None:
+    if args.folds < 2:
+        raise _UsageError(f"--folds must be at least 2, got {args.folds}")
+    if args.neighbors < 1:
+        raise _UsageError(f"--neighbors must be at least 1, got {args.neighbors}")
+    if args.path is None and args.n_per_class < 1:
+        raise _UsageError(f"--n-per-class must be at least 1, got {args.n_per_class}")
+    if args.n_jobs == 0:
+        raise _UsageError("--n-jobs must not be 0 (use -1 for all cores)")
+    if args.verbose < 0:
+        raise _UsageError(f"--verbose must be at least 0, got {args.verbose}")
+    if args.output.exists() and not args.output.is_dir():
+        raise _UsageError(f"--output {str(args.output)!r} exists and is not a folder")
+
+
+def _estimators(args):
     eigen = LaplacianEigenTransformer(
         eigen_index=args.eigen_index,
         laplacian=args.laplacian,
@@ -254,21 +501,124 @@ def main(argv: list[str] | None = None) -> int:
         n_jobs=args.n_jobs,
         random_state=args.random_state,
     )
-    persistence = LowerStarPersistence(filtration=args.filtration, n_jobs=args.n_jobs)
-    distance = DiagramDistance(metric=args.metric, order=args.order, n_jobs=args.n_jobs)
-    print(f"pipeline: {eigen!r} -> {persistence!r} -> {distance!r} -> {args.neighbors}-NN")
+    eigen.set_params(verbose=args.verbose)
+    persistence = LowerStarPersistence(
+        filtration=args.filtration, n_jobs=args.n_jobs, verbose=args.verbose
+    )
+    distance = DiagramDistance(
+        metric=args.metric, order=args.order, n_jobs=args.n_jobs, verbose=args.verbose
+    )
+    for estimator in (eigen, persistence, distance):
+        try:
+            estimator._check_params()
+        except ValueError as exc:  # InvalidParameterError is a ValueError
+            raise _UsageError(" ".join(str(exc).split())) from None
+    return eigen, persistence, distance
+
+
+def _list_folder(args):
+    """The files of the folder, listed without loading, and the class check."""
+    try:
+        listing = load_mesh_folder(args.path, extensions=args.extensions, load=False)
+    except (ValueError, TypeError) as exc:
+        raise _UsageError(" ".join(str(exc).split())) from None
+    return listing
+
+
+def _load(args, names: _Names):
+    """The meshes of the folder (in parallel with a progress bar where supported)."""
+    return load_mesh_folder(
+        args.path, extensions=args.extensions, n_jobs=args.n_jobs, verbose=args.verbose
+    )
+
+
+def _check_classes(counts, names, folds) -> None:
+    small = [(str(n), int(c)) for n, c in zip(names, counts, strict=True) if c < folds]
+    if small:
+        listed = ", ".join(f"{n!r} ({c})" for n, c in small[:5]) + (
+            ", ..." if len(small) > 5 else ""
+        )
+        raise _UsageError(
+            f"{len(small)} class(es) have fewer meshes than --folds {folds}: {listed}; "
+            "lower --folds or add meshes"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m sklearn_meshph`` and the ``sklearn-meshph`` script."""
+    args = build_parser().parse_args(argv)
+    try:
+        return _run(args)
+    except _UsageError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except _DataError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+
+
+class _DataError(Exception):
+    """A mesh that cannot be processed: one line naming its file, exit status 1."""
+
+
+def _stage(names: _Names, function, *args):
+    try:
+        return function(*args)
+    except (ValueError, TypeError) as exc:
+        raise _DataError(names.message(exc)) from None
+
+
+def _run(args) -> int:
+    _check_options(args)
+    eigen, persistence, distance = _estimators(args)
+    timings = {}
+    start = time.perf_counter()
+    if args.path is None:
+        if args.n_per_class < args.folds:
+            raise _UsageError(
+                f"--n-per-class {args.n_per_class} is smaller than --folds {args.folds}"
+            )
+        data = make_shapes(n_per_class=args.n_per_class, random_state=args.random_state)
+        source = f"built-in synthetic shapes (make_shapes, {args.n_per_class} per class)"
+        names = _Names()
+        filenames = [f"synthetic/{data.target_names[t]}/{i}" for i, t in enumerate(data.target)]
+        class_names = [str(n) for n in data.target_names]
+    else:
+        listing = _list_folder(args)
+        class_names = [str(n) for n in listing.target_names]
+        _check_classes(
+            np.bincount(listing.target, minlength=len(class_names)), class_names, args.folds
+        )
+        names = _Names(listing.filenames, args.path)
+        data = _stage(names, _load, args, names)
+        source = str(args.path)
+        filenames = list(names.files)
+    meshes, y = list(data.data), np.asarray(data.target)
+    timings["load"] = time.perf_counter() - start
+    counts = np.bincount(y, minlength=len(class_names))
+    print(f"data: {source}: {len(meshes)} meshes, {len(class_names)} classes")
+    print(_wrap("classes: " + ", ".join(class_names)))
+    print("pipeline:")
+    for step in (eigen, persistence, distance):
+        print(f"  {' '.join(repr(step).split())} ->")
+    print(f"  {args.neighbors}-NN, {args.folds}-fold stratified CV")
 
     t = time.perf_counter()
-    fields = compute_fields(meshes, eigen)
+    fields, warned = _stage(names, compute_fields, meshes, eigen, names)
     timings["eigenfunctions"] = time.perf_counter() - t
     t = time.perf_counter()
-    diagrams = persistence.fit_transform(fields)
+    diagrams = _stage(names, persistence.fit_transform, fields)
     timings["persistence"] = time.perf_counter() - t
     t = time.perf_counter()
-    matrix = compute_distances(diagrams, distance)
+    matrix = _stage(names, compute_distances, diagrams, distance)
     timings["distances"] = time.perf_counter() - t
     t = time.perf_counter()
-    scores, predicted = cross_validate(matrix, y, args.folds, args.neighbors, args.random_state)
+    try:
+        scores, predicted, fold_of = cross_validate(
+            matrix, y, args.folds, args.neighbors, args.random_state
+        )
+    except ValueError as exc:  # e.g. more neighbours than training samples in a fold
+        raise _UsageError(" ".join(str(exc).split())) from None
     timings["cross-validation"] = time.perf_counter() - t
 
     print(
@@ -276,22 +626,65 @@ def main(argv: list[str] | None = None) -> int:
         f"(+/- {scores.std():.3f}; folds {', '.join(f'{s:.2f}' for s in scores)})"
     )
     print("\nconfusion matrix (rows: true class, columns: predicted)")
-    print(format_confusion(y, predicted, names))
+    print(format_confusion(y, predicted, class_names))
 
+    diagram_names = persistence.diagram_names(fields[0].n_functions)
     if not args.no_plots:
         t = time.perf_counter()
         try:
-            labels = persistence.diagram_names(fields[0].n_functions)
             written = write_pictures(
-                args.output, matrix, y, names, fields, diagrams, labels, args.random_state
+                args.output,
+                matrix,
+                y,
+                class_names,
+                fields,
+                diagrams,
+                diagram_names,
+                args.random_state,
+                eigen.eigen_index,
             )
         except ImportError as exc:
             print(f"\npictures skipped: {exc}")
         else:
-            print("\npictures: " + ", ".join(str(p) for p in written))
+            print(f"\npictures in {args.output}: " + ", ".join(p.name for p in written))
         timings["pictures"] = time.perf_counter() - t
 
+    t = time.perf_counter()
+    settings = {
+        key: (str(value) if isinstance(value, Path) else value)
+        for key, value in sorted(vars(args).items())
+    }
+    summary = {
+        "version": _version(),
+        "source": source,
+        "settings": settings,
+        "n_samples": len(y),
+        "class_names": class_names,
+        "class_counts": counts.tolist(),
+        "accuracy": {
+            "per_fold": scores.tolist(),
+            "mean": float(scores.mean()),
+            "std": float(scores.std()),
+        },
+        "warnings": warned,
+    }
+    summary["timings"] = dict(timings, total=time.perf_counter() - start)
+    written = write_data(
+        args.output,
+        matrix=matrix,
+        diagrams=diagrams,
+        diagram_names=diagram_names,
+        y=y,
+        predicted=predicted,
+        fold_of=fold_of,
+        names=class_names,
+        filenames=filenames,
+        summary=summary,
+    )
+    timings["results"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - start
+    print(f"results in {args.output}: " + ", ".join(p.name for p in written))
+
     print("\ntime per stage (s)")
     for name, seconds in timings.items():
         print(f"  {name:<18}{seconds:8.2f}")

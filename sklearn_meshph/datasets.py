@@ -8,40 +8,79 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from joblib import delayed
 from sklearn.utils import Bunch, check_random_state
 
 from ._param_validation import Interval, validate_params
-from .mesh.reading import read_mesh_file
+from ._progress import parallel, track
+from .mesh.reading import COMPRESSIONS, read_mesh_file
 
 __all__ = ["load_mesh_folder", "make_shapes"]
 
-MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
+_PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
+
+#: The file name endings :func:`load_mesh_folder` reads by default: each mesh format,
+#: plain and compressed with gzip, bzip2 or xz (``.off.gz``, ``.obj.bz2``...).
+MESH_EXTENSIONS = _PLAIN_EXTENSIONS + tuple(
+    ext + compression for compression in COMPRESSIONS for ext in _PLAIN_EXTENSIONS
+)
 
 
-@validate_params({"extensions": [tuple, list], "load": ["boolean"]})
-def load_mesh_folder(path, *, extensions=MESH_EXTENSIONS, load=True) -> Bunch:
+@validate_params(
+    {
+        "extensions": [tuple, list],
+        "load": ["boolean"],
+        "n_jobs": [Integral, None],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
+    }
+)
+def load_mesh_folder(
+    path, *, extensions=MESH_EXTENSIONS, load=True, n_jobs=None, verbose=0
+) -> Bunch:
     """Load a folder of meshes with one class per sub-folder.
 
     Like :func:`sklearn.datasets.load_files`: every sub-folder of ``path`` is a class
     (sorted by name), every mesh file in it a sample (sorted by name). Sub-folders whose
-    names start with ``_`` or ``.`` are ignored.
+    names start with ``_`` or ``.`` are ignored, and so are files whose names do not end
+    with one of ``extensions``. A sub-folder without mesh files is not a class.
+
+    Compressed files (``.gz``, ``.bz2``, ``.xz``, e.g. ``ant/081.off.gz``) are
+    decompressed in memory, in the format of the inner name; a file that decompresses
+    beyond ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes (2 GiB) is
+    refused.
 
     Parameters
     ----------
     path : str or os.PathLike
         The root folder.
-    extensions : tuple of str, default=(".obj", ".ply", ".off", ".stl", ".glb")
-        File name endings that count as meshes (case-insensitive).
+    extensions : tuple of str, default=MESH_EXTENSIONS
+        File name endings that count as meshes (case-insensitive). The default holds
+        ``.obj``, ``.ply``, ``.off``, ``.stl`` and ``.glb``, each also followed by
+        ``.gz``, ``.bz2`` or ``.xz``.
     load : bool, default=True
         Load the meshes (``trimesh.Trimesh`` with ``process=False``, vertex order kept).
         With ``False``, ``data`` holds the file paths, which every estimator accepts
         too: meshes are then read inside the workers, which saves memory.
+    n_jobs : int, default=None
+        Files read in parallel through joblib: ``None`` means 1 unless in a
+        :func:`joblib.parallel_backend` context, ``-1`` means all processors. The
+        result is the same for any ``n_jobs`` and backend, in file order. Each worker
+        holds at most one decompressed file at a time.
+    verbose : int, default=0
+        With ``verbose > 0`` and ``load=True``, a progress bar over the files on stderr
+        (needs tqdm, the ``progress`` extra); nothing is printed at 0.
 
     Returns
     -------
     data : Bunch
         ``data`` (meshes or paths), ``target`` (int labels), ``target_names``,
         ``filenames`` and ``DESCR``.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is not a folder, holds no mesh file in its sub-folders, or a file
+        cannot be read (the message names the sample and the file).
 
     Examples
     --------
@@ -75,11 +114,18 @@ def load_mesh_folder(path, *, extensions=MESH_EXTENSIONS, load=True) -> Bunch:
         raise ValueError(
             f"no mesh files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
         )
-    data = (
-        [read_mesh_file(f, f"sample {k}") for k, f in enumerate(filenames)]
-        if load
-        else [str(f) for f in filenames]
-    )
+    if load:
+        jobs = (delayed(read_mesh_file)(f, f"sample {k}") for k, f in enumerate(filenames))
+        data = list(
+            track(
+                parallel(n_jobs)(jobs),
+                total=len(filenames),
+                desc="reading meshes",
+                verbose=verbose,
+            )
+        )
+    else:
+        data = [str(f) for f in filenames]
     return Bunch(
         data=data,
         target=np.asarray(target),

@@ -69,8 +69,27 @@ def plot_diagram(diagram, ax=None, *, labels=None, title=None):
     return ax
 
 
+def _class_styles(n_classes: int):
+    """A (colour, marker) per class: distinct for up to 10 classes by colour alone
+    (tab10), beyond that tab20 colours combined with a cycle of markers."""
+    plt = _pyplot()
+    markers = "o"
+    colors = plt.get_cmap("tab10").colors
+    if n_classes > 10:
+        colors = plt.get_cmap("tab20").colors
+        markers = "osD^vP*Xph<>"
+    return [
+        (colors[c % len(colors)], markers[(c // len(colors) + c) % len(markers)])
+        for c in range(n_classes)
+    ]
+
+
 def plot_embedding(embedding, labels, target_names=None, ax=None):
     """Scatter a 2-D embedding (e.g. t-SNE of a distance matrix) coloured by class.
+
+    Up to 10 classes are told apart by colour; more by colour and marker (tab20 and a
+    cycle of markers). The legend is placed outside the axes, on their right, in
+    several columns for many classes.
 
     Parameters
     ----------
@@ -87,17 +106,31 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
     ax = _axes(ax)
     embedding = np.asarray(embedding)
     labels = np.asarray(labels)
-    for c in np.unique(labels):
+    classes = np.unique(labels)
+    n_classes = int(max(classes.max() + 1, len(target_names or ()))) if classes.size else 0
+    styles = _class_styles(n_classes)
+    for c in classes:
         name = target_names[c] if target_names is not None else str(c)
         points = embedding[labels == c]
-        ax.scatter(points[:, 0], points[:, 1], s=22, label=name)
-    ax.legend(fontsize=7, markerscale=0.8)
+        color, marker = styles[int(c)]
+        ax.scatter(points[:, 0], points[:, 1], s=22, color=color, marker=marker, label=name)
+    ax.legend(
+        fontsize=7,
+        markerscale=0.8,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        borderaxespad=0.0,
+        ncol=1 if len(classes) <= 20 else 2,
+        frameon=False,
+    )
     ax.set_xticks([])
     ax.set_yticks([])
     return ax
 
 
-def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="coolwarm"):
+def plot_mesh_function(
+    vertices, faces=None, values=None, ax=None, *, cmap="coolwarm", colorbar_label=None
+):
     """Draw a function on a triangle mesh (face colour = mean of its vertex values).
 
     Parameters
@@ -108,6 +141,9 @@ def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="cool
     values : ndarray of shape (n,)
     ax : matplotlib 3-D Axes, optional
     cmap : str, default="coolwarm"
+    colorbar_label : str, optional
+        Label of the colour bar (with a ScalarField whose ``values`` are
+        eigenfunctions, default: ``"eigenfunction value"``).
 
     Returns
     -------
@@ -117,6 +153,8 @@ def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="cool
         field = vertices
         vertices, faces = field.vertices, field.faces
         values = field.columns()[0]
+        if colorbar_label is None and getattr(field, "eigenvalues", None) is not None:
+            colorbar_label = "eigenfunction value"
     plt = _pyplot()
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -135,5 +173,7 @@ def plot_mesh_function(vertices, faces=None, values=None, ax=None, *, cmap="cool
     ax.set_box_aspect((1, 1, 1))
     ax.set_axis_off()
     mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-    ax.figure.colorbar(mappable, ax=ax, shrink=0.6)
+    bar = ax.figure.colorbar(mappable, ax=ax, shrink=0.6)
+    if colorbar_label:
+        bar.set_label(colorbar_label, fontsize=8)
     return ax

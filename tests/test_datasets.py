@@ -143,15 +143,20 @@ def test_main_job_end_to_end(tmp_path, capsys):
     ) in out
     assert "time per stage" in out
     assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "diagrams.npz",
         "diagrams.png",
+        "distances.npy",
         "eigenfunctions.png",
+        "predictions.csv",
+        "summary.json",
         "tsne.png",
     ]
 
 
 def test_main_job_on_a_folder_and_help(tmp_path, capsys):
     write_folder(tmp_path)
-    assert main([str(tmp_path), "--folds", "2", "--no-plots", "--eigen-index", "1"]) == 0
+    output = ["--output", str(tmp_path / "_out")]  # "_": not a class folder
+    assert main([str(tmp_path), "--folds", "2", "--no-plots", "--eigen-index", "1", *output]) == 0
     assert "4 meshes, 2 classes" in capsys.readouterr().out
     with pytest.raises(SystemExit) as exit_info:
         main(["--help"])

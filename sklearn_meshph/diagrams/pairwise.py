@@ -5,9 +5,10 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from joblib import Parallel, delayed, effective_n_jobs
+from joblib import delayed, effective_n_jobs
 
 from .._param_validation import Interval, Options, validate_params
+from .._progress import parallel, track
 from ._batch import pack, pair_distances
 from .distances import METRICS, kernel_metric
 from .validation import check_samples
@@ -44,6 +45,7 @@ def _block_distances(left, right, start, stop, n_cols, symmetric, n_parts, code,
         "order": [Interval(Real, 1, None, closed="left")],
         "internal_p": [Interval(Real, 1, None, closed="left")],
         "n_jobs": [Integral, None],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
     }
 )
 def pairwise_diagram_distances(
@@ -56,6 +58,7 @@ def pairwise_diagram_distances(
     n_jobs=None,
     dtype=np.float64,
     out=None,
+    verbose=0,
 ) -> np.ndarray:
     """Distance matrix between two collections of diagrams (or of tuples of diagrams).
 
@@ -83,6 +86,9 @@ def pairwise_diagram_distances(
         Of the returned matrix (distances are computed in float64).
     out : ndarray of shape (len(X), len(Y)), optional
         Written in place and returned.
+    verbose : int, default=0
+        With ``verbose > 0``, a progress bar over the blocks of pairs on stderr (needs
+        tqdm, the ``progress`` extra); nothing is printed at 0.
 
     Returns
     -------
@@ -107,19 +113,12 @@ def pairwise_diagram_distances(
     shape = (len(left), len(left if right is None else right))
     if out is not None and out.shape != shape:
         raise ValueError(f"out has shape {out.shape}, expected {shape}")
-    return distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out)
+    return distance_matrix(
+        left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=verbose
+    )
 
 
-def _parallel(n_jobs) -> Parallel:
-    """Blocks come back as they finish, where the backend can (loky, threading, dask
-    with joblib >= 1.4); others (multiprocessing) return them all at once."""
-    try:
-        return Parallel(n_jobs=n_jobs, return_as="generator")
-    except ValueError:  # "Backend ... does not support return_as=generator"
-        return Parallel(n_jobs=n_jobs)
-
-
-def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out):
+def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=0):
     """:func:`pairwise_diagram_distances` on validated samples."""
     code, order = kernel_metric(metric, order, internal_p)
     internal_p = float(internal_p)
@@ -134,13 +133,14 @@ def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out):
     n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
     bounds = _row_blocks(n, pairs_per_row, n_tasks)
     matrix = np.zeros((n, m), dtype=dtype) if out is None else out
-    tasks = _parallel(n_jobs)(
+    tasks = parallel(n_jobs)(
         delayed(_block_distances)(
             packed_left, packed_right, a, b, m, symmetric, n_parts, code, order, internal_p
         )
         for a, b in zip(bounds[:-1], bounds[1:], strict=True)
     )
-    for a, b, values in zip(bounds[:-1], bounds[1:], tasks, strict=True):
+    blocks = track(tasks, total=len(bounds) - 1, desc="distances", verbose=verbose)
+    for a, b, values in zip(bounds[:-1], bounds[1:], blocks, strict=True):
         if symmetric:
             position = 0
             for i in range(a, b):

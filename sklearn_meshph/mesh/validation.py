@@ -29,7 +29,10 @@ def check_mesh(mesh, *, index: int | None = None) -> tuple[np.ndarray, np.ndarra
     mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
         A triangle mesh: a trimesh object, a pair of arrays of shapes (n, 3) (float) and
         (m, 3) (integer), or the path of a mesh file trimesh reads (OBJ, PLY, OFF, STL,
-        GLB...), loaded with ``process=False`` so that the vertex order is kept.
+        GLB...), loaded with ``process=False`` so that the vertex order is kept. A path
+        may be compressed (``.gz``, ``.bz2``, ``.xz``: ``bunny.off.gz``); it is then
+        decompressed in memory, and refused beyond
+        ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes (2 GiB).
     index : int, optional
         Position of the mesh in a collection, used in error messages.
 
@@ -43,7 +46,8 @@ def check_mesh(mesh, *, index: int | None = None) -> tuple[np.ndarray, np.ndarra
     TypeError
         If ``mesh`` is none of the accepted types.
     ValueError
-        If the file cannot be read, the arrays have the wrong shape or dtype, a vertex
+        If the file does not exist, is empty, cannot be decompressed or read (the
+        message names the file), the arrays have the wrong shape or dtype, a vertex
         coordinate is not finite, a face index is out of range, or there are no faces.
 
     Examples

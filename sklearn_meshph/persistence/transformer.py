@@ -5,10 +5,11 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import delayed
 
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
+from .._progress import parallel, track
 from ..mesh._graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
 from ..mesh.validation import check_mesh, check_values, where
@@ -93,6 +94,9 @@ class LowerStarPersistence(SampleTransformer):
     n_jobs : int, default=None
         Samples processed in parallel. ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors.
+    verbose : int, default=0
+        With ``verbose > 0``, a progress bar over the samples on stderr (needs tqdm,
+        the ``progress`` extra); nothing is printed at 0.
 
     See Also
     --------
@@ -149,13 +153,22 @@ class LowerStarPersistence(SampleTransformer):
         "essential": [Options(ESSENTIAL_POLICIES)],
         "min_persistence": [Interval(Real, 0, None, closed="left")],
         "n_jobs": [Integral, None],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
     }
 
-    def __init__(self, filtration="symmetric", essential="keep", min_persistence=0.0, n_jobs=None):
+    def __init__(
+        self,
+        filtration="symmetric",
+        essential="keep",
+        min_persistence=0.0,
+        n_jobs=None,
+        verbose=0,
+    ):
         self.filtration = filtration
         self.essential = essential
         self.min_persistence = min_persistence
         self.n_jobs = n_jobs
+        self.verbose = verbose
 
     def transform(self, X):
         """Compute the persistence diagram(s) of every sample.
@@ -172,7 +185,7 @@ class LowerStarPersistence(SampleTransformer):
         """
         self._check_params()
         samples = self._check_samples(X)
-        return Parallel(n_jobs=self.n_jobs)(
+        results = parallel(self.n_jobs)(
             delayed(_diagrams_one)(
                 sample,
                 i,
@@ -182,6 +195,7 @@ class LowerStarPersistence(SampleTransformer):
             )
             for i, sample in enumerate(samples)
         )
+        return list(track(results, total=len(samples), desc="persistence", verbose=self.verbose))
 
     def diagram_names(self, n_functions: int = 1) -> list[str]:
         """Names of the diagrams of one sample, in output order.

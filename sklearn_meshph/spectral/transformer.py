@@ -7,12 +7,13 @@ import warnings
 from numbers import Integral
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import delayed
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_memory
 
 from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
+from .._progress import parallel, track
 from .._threads import one_blas_thread
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
@@ -200,6 +201,9 @@ class LaplacianEigenTransformer(SampleTransformer):
         Factorization backend of the shift-invert eigensolver: our supernodal Cholesky
         (``"auto"`` and ``"cholesky"``) or SciPy's SuperLU. Both give the same
         eigenpairs up to rounding.
+    verbose : int, default=0
+        With ``verbose > 0``, a progress bar over the meshes on stderr (needs tqdm,
+        the ``progress`` extra); nothing is printed at 0.
 
     Attributes
     ----------
@@ -251,6 +255,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "n_jobs": [Integral, None],
         "random_state": ["random_state"],
         "solver": [Options(SOLVERS)],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
     }
 
     def __init__(
@@ -264,6 +269,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         n_jobs=None,
         random_state=0,
         solver="auto",
+        verbose=0,
     ):
         self.eigen_index = eigen_index
         self.laplacian = laplacian
@@ -274,6 +280,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         self.n_jobs = n_jobs
         self.random_state = random_state
         self.solver = solver
+        self.verbose = verbose
 
     def _indices(self) -> tuple[int, ...]:
         if isinstance(self.eigen_index, tuple):
@@ -337,12 +344,13 @@ class LaplacianEigenTransformer(SampleTransformer):
         # Held for the whole parallel call: threads of a threading backend then share
         # one limit instead of setting and restoring it under each other's feet.
         with one_blas_thread():
-            solved = Parallel(n_jobs=self.n_jobs)(
+            tasks = parallel(self.n_jobs)(
                 delayed(_eigen_one)(
                     meshes[i], i, indices=indices, settings=settings, seed=seed, memory=memory
                 )
                 for i in order
             )
+            solved = list(track(tasks, total=len(order), desc="eigensolves", verbose=self.verbose))
         results = [None] * len(meshes)
         for i, result in zip(order, solved, strict=True):
             results[i] = result

@@ -1,0 +1,291 @@
+"""Mesh files as users have them: compressed, malformed, hostile, in untidy folders."""
+
+import bz2
+import gzip
+import lzma
+import os
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from sklearn_meshph import check_mesh, load_mesh_folder
+from sklearn_meshph.datasets import MESH_EXTENSIONS
+from sklearn_meshph.mesh import reading
+from sklearn_meshph.mesh.reading import read_mesh_file, split_compression
+
+DATA_DIR = Path(
+    os.environ.get(
+        "SKLEARN_MESHPH_DATA", Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    )
+)
+
+COMPRESSORS = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}
+
+
+@pytest.fixture(scope="session")
+def watertight_dir():
+    """The SHREC'07 Watertight development half, or a clean skip when it is absent."""
+    path = DATA_DIR / "watertight_dev"
+    if not path.is_dir():
+        pytest.skip(f"Watertight data not found at {path} (set SKLEARN_MESHPH_DATA)")
+    return path
+
+
+@pytest.fixture
+def sphere():
+    return trimesh.creation.icosphere(2)
+
+
+def write(path, mesh):
+    mesh.export(path)
+    return path
+
+
+def compress(path, compression):
+    """``path`` compressed next to itself as ``<name><compression>``."""
+    out = path.with_name(path.name + compression)
+    out.write_bytes(COMPRESSORS[compression](path.read_bytes()))
+    return out
+
+
+@pytest.mark.parametrize("compression", [".gz", ".bz2", ".xz"])
+@pytest.mark.parametrize("ext", [".off", ".obj", ".ply"])
+def test_compressed_files_read_as_the_plain_file(tmp_path, sphere, ext, compression):
+    plain = write(tmp_path / f"a{ext}", sphere)
+    packed = compress(plain, compression)
+    expected = check_mesh(plain)
+    for actual in (check_mesh(packed), check_mesh(str(packed))):
+        for a, b in zip(actual, expected, strict=True):
+            assert a.dtype == b.dtype
+            np.testing.assert_array_equal(a, b)
+    mesh = read_mesh_file(packed)
+    np.testing.assert_array_equal(mesh.faces, expected[1])
+
+
+def test_upper_case_names_and_split_compression(tmp_path, sphere):
+    packed = compress(write(tmp_path / "A.OFF", sphere), ".gz")
+    packed = packed.rename(tmp_path / "B.OFF.GZ")
+    assert split_compression(packed) == ("off", ".gz")
+    assert len(check_mesh(packed)[1]) == len(sphere.faces)
+
+
+def test_stl_and_triangle_soup_obj_load(tmp_path, sphere):
+    stl = write(tmp_path / "a.stl", sphere)
+    vertices, faces = check_mesh(stl)
+    # STL is a triangle soup: three vertices per face, as in the file (no welding here).
+    assert faces.shape == sphere.faces.shape
+    assert vertices.shape == (3 * len(sphere.faces), 3)
+    soup = sphere.vertices[sphere.faces].reshape(-1, 3)
+    lines = [f"v {x} {y} {z}" for x, y, z in soup]
+    lines += [f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}" for k in range(len(sphere.faces))]
+    obj = tmp_path / "soup.obj"
+    obj.write_text("\n".join(lines) + "\n")
+    mesh = read_mesh_file(obj)
+    assert isinstance(mesh, trimesh.Trimesh)
+    vertices, faces = check_mesh(obj)
+    assert vertices.dtype == np.float64 and faces.dtype == np.int64
+    assert faces.shape == sphere.faces.shape and len(vertices) == 3 * len(faces)
+    np.testing.assert_allclose(vertices[faces[0]], sphere.vertices[sphere.faces[0]])
+
+
+def test_truncated_file_is_named(tmp_path):
+    path = tmp_path / "cut.off"
+    path.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
+    with pytest.raises(ValueError, match=r"^mesh: .*cut\.off"):
+        check_mesh(path)
+    with pytest.raises(ValueError, match=r"^sample 2: .*cut\.off"):
+        check_mesh(path, index=2)
+
+
+def test_truncated_archive_is_named(tmp_path, sphere):
+    packed = compress(write(tmp_path / "a.off", sphere), ".gz")
+    cut = tmp_path / "cut.off.gz"
+    cut.write_bytes(packed.read_bytes()[: packed.stat().st_size // 2])
+    with pytest.raises(ValueError, match=r"cannot decompress .*cut\.off\.gz"):
+        check_mesh(cut)
+    fake = tmp_path / "fake.off.xz"
+    fake.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")  # not compressed
+    with pytest.raises(ValueError, match=r"cannot decompress .*fake\.off\.xz"):
+        check_mesh(fake)
+
+
+@pytest.mark.parametrize("compression", [None, ".gz"])
+def test_a_header_claiming_too_many_vertices_fails_fast(tmp_path, compression):
+    path = tmp_path / "liar.off"
+    path.write_text("OFF\n100000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    if compression:
+        path = compress(path, compression)
+    tracemalloc.start()
+    start = time.perf_counter()
+    try:
+        with pytest.raises(ValueError, match=r"liar\.off"):
+            check_mesh(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert time.perf_counter() - start < 5.0
+    assert peak < 50 * 2**20  # 1e8 vertices would be 2.4 GB
+
+
+def test_a_ply_header_claiming_too_many_vertices_fails(tmp_path):
+    header = (
+        "ply\nformat {}\nelement vertex 100000000\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "end_header\n"
+    )
+    ascii_ply = tmp_path / "liar.ply"
+    ascii_ply.write_text(header.format("ascii 1.0") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    binary_ply = tmp_path / "liar_binary.ply"
+    binary_ply.write_bytes(
+        header.format("binary_little_endian 1.0").encode()
+        + np.eye(3, dtype="<f4").tobytes()
+        + b"\x03"
+        + np.arange(3, dtype="<i4").tobytes()
+    )
+    for path in (ascii_ply, binary_ply):
+        start = time.perf_counter()
+        with pytest.raises(ValueError, match=path.name):
+            check_mesh(path)
+        assert time.perf_counter() - start < 5.0
+
+
+def test_a_compression_bomb_is_refused(tmp_path, monkeypatch):
+    # 64 MiB of zeros compress to about 64 KiB; with a 1 MiB limit it is refused after
+    # reading about the limit, not the whole content.
+    bomb = tmp_path / "bomb.off.gz"
+    with gzip.open(bomb, "wb") as stream:
+        chunk = b"\0" * 2**20
+        for _ in range(64):
+            stream.write(chunk)
+    assert bomb.stat().st_size < 2**20
+    with pytest.raises(ValueError, match=r"bomb\.off\.gz.* decompresses to more than 1048576"):
+        read_mesh_file(bomb, max_decompressed_size=2**20)
+    monkeypatch.setattr(reading, "MAX_DECOMPRESSED_SIZE", 2**20)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=r"^mesh: .*bomb\.off\.gz.* more than"):
+            check_mesh(bomb)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16 * 2**20
+    root = tmp_path / "folder"
+    (root / "a").mkdir(parents=True)
+    bomb.rename(root / "a" / "bomb.off.gz")
+    with pytest.raises(ValueError, match=r"^sample 0: .*bomb\.off\.gz"):
+        load_mesh_folder(root)
+
+
+def test_default_limit_is_documented():
+    assert reading.MAX_DECOMPRESSED_SIZE == 2 * 1024**3
+    assert "2 GiB" in read_mesh_file.__doc__
+
+
+def test_a_file_exactly_at_the_limit_is_read(tmp_path, sphere):
+    plain = write(tmp_path / "a.off", sphere)
+    packed = compress(plain, ".bz2")
+    size = plain.stat().st_size
+    assert len(read_mesh_file(packed, max_decompressed_size=size).faces) == len(sphere.faces)
+    with pytest.raises(ValueError, match="more than"):
+        read_mesh_file(packed, max_decompressed_size=size - 1)
+
+
+def test_directory_missing_empty_and_unknown(tmp_path):
+    folder = tmp_path / "dir.off"
+    folder.mkdir()
+    with pytest.raises(ValueError, match=r"dir\.off.* is a directory"):
+        check_mesh(folder)
+    with pytest.raises(ValueError, match=r"missing\.off.* does not exist"):
+        check_mesh(tmp_path / "missing.off")
+    with pytest.raises(ValueError, match=r"missing\.off\.gz.* does not exist"):
+        check_mesh(str(tmp_path / "missing.off.gz"))
+    empty = tmp_path / "empty.obj"
+    empty.touch()
+    with pytest.raises(ValueError, match=r"empty\.obj.* is empty"):
+        check_mesh(empty)
+    empty_gz = tmp_path / "empty.obj.gz"
+    empty_gz.write_bytes(gzip.compress(b""))
+    with pytest.raises(ValueError, match=r"empty\.obj\.gz.* empty once decompressed"):
+        check_mesh(empty_gz)
+    nameless = tmp_path / "mesh.gz"
+    nameless.write_bytes(gzip.compress(b"OFF\n"))
+    with pytest.raises(ValueError, match=r"cannot tell the mesh format of .*mesh\.gz"):
+        check_mesh(nameless)
+    text = tmp_path / "notes.txt"
+    text.write_text("not a mesh\n")
+    with pytest.raises(ValueError, match=r"notes\.txt"):
+        check_mesh(text)
+
+
+def test_mixed_folder_and_single_mesh_class(tmp_path, sphere):
+    (tmp_path / "balls").mkdir()
+    (tmp_path / "boxes").mkdir()
+    (tmp_path / "docs").mkdir()
+    (tmp_path / ".hidden").mkdir()
+    write(tmp_path / "balls" / "a.off", sphere)
+    compress(write(tmp_path / "balls" / "b.obj", sphere), ".xz").touch()
+    (tmp_path / "balls" / "b.obj").unlink()
+    write(tmp_path / "boxes" / "only.ply", trimesh.creation.box())
+    (tmp_path / "balls" / "README.md").write_text("about balls\n")
+    (tmp_path / "balls" / "thumb.png").write_bytes(b"\x89PNG")
+    (tmp_path / "balls" / "archive.tar.gz").write_bytes(gzip.compress(b"x"))
+    (tmp_path / "balls" / "sub").mkdir()
+    (tmp_path / "docs" / "notes.txt").write_text("nothing\n")
+    write(tmp_path / ".hidden" / "x.off", sphere)
+    (tmp_path / "top.off").write_text("OFF\n")
+    data = load_mesh_folder(tmp_path)
+    assert data.target_names.tolist() == ["balls", "boxes"]
+    assert data.target.tolist() == [0, 0, 1]
+    assert [Path(f).name for f in data.filenames] == ["a.off", "b.obj.xz", "only.ply"]
+    assert [len(m.faces) for m in data.data] == [len(sphere.faces)] * 2 + [12]
+    assert set(data) >= {"data", "target", "target_names", "filenames", "DESCR"}
+
+
+def test_default_extensions_include_compressed_variants():
+    for ext in (".obj", ".ply", ".off", ".stl", ".glb"):
+        assert ext in MESH_EXTENSIONS
+        for compression in (".gz", ".bz2", ".xz"):
+            assert ext + compression in MESH_EXTENSIONS
+
+
+def test_parallel_loading_keeps_order(tmp_path, capsys):
+    for k, name in enumerate(["c", "a", "b"]):
+        (tmp_path / name).mkdir()
+        for j in range(3):
+            mesh = trimesh.creation.icosphere(1)
+            mesh = trimesh.Trimesh(mesh.vertices * (1 + 3 * k + j), mesh.faces, process=False)
+            compress(write(tmp_path / name / f"{j}.off", mesh), ".gz")
+            (tmp_path / name / f"{j}.off").unlink()
+    serial = load_mesh_folder(tmp_path)
+    parallel = load_mesh_folder(tmp_path, n_jobs=2, verbose=1)
+    assert serial.filenames.tolist() == parallel.filenames.tolist()
+    assert serial.target.tolist() == parallel.target.tolist() == [0] * 3 + [1] * 3 + [2] * 3
+    for a, b in zip(serial.data, parallel.data, strict=True):
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        np.testing.assert_array_equal(a.faces, b.faces)
+    assert "reading meshes" in capsys.readouterr().err
+    load_mesh_folder(tmp_path, verbose=0)
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    "params", [{"n_jobs": "two"}, {"verbose": -1}, {"n_jobs": 1.5}, {"extensions": ".off"}]
+)
+def test_load_mesh_folder_parameters_are_checked(tmp_path, params):
+    with pytest.raises((ValueError, TypeError)):
+        load_mesh_folder(tmp_path, **params)
+
+
+def test_load_watertight_folder(watertight_dir):
+    data = load_mesh_folder(watertight_dir, n_jobs=2)
+    assert len(data.data) == 200
+    assert len(data.target_names) == 20
+    assert np.bincount(data.target).tolist() == [10] * 20
+    assert all(f.endswith(".off.gz") for f in data.filenames)
+    vertices, faces = check_mesh(data.filenames[0])
+    np.testing.assert_array_equal(vertices, data.data[0].vertices)
+    np.testing.assert_array_equal(faces, data.data[0].faces)
