@@ -33,7 +33,9 @@ from __future__ import annotations
 
 import argparse
 import csv
+import glob
 import json
+import os
 import re
 import sys
 import time
@@ -544,6 +546,13 @@ def _check_classes(counts, names, folds) -> None:
         )
 
 
+def _kernels_cached() -> bool:
+    """Whether numba's cache already holds compiled kernels of this package (in the
+    package's ``__pycache__`` folders, or in ``NUMBA_CACHE_DIR`` when it is set)."""
+    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.dirname(os.path.abspath(__file__))
+    return any(glob.iglob(os.path.join(root, "**", "*.nbi"), recursive=True))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m sklearn_meshph`` and the ``sklearn-meshph`` script."""
     args = build_parser().parse_args(argv)
@@ -602,6 +611,11 @@ def _run(args) -> int:
     for step in (eigen, persistence, distance):
         print(f"  {' '.join(repr(step).split())} ->")
     print(f"  {args.neighbors}-NN, {args.folds}-fold stratified CV")
+    if not _kernels_cached():
+        print(
+            "note: first run: compiling the numba kernels once (about half a minute on 2 "
+            "cores); later runs load them from the cache"
+        )
 
     t = time.perf_counter()
     fields, warned = _stage(names, compute_fields, meshes, eigen, names)
