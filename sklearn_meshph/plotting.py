@@ -107,7 +107,8 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
     embedding = np.asarray(embedding)
     labels = np.asarray(labels)
     classes = np.unique(labels)
-    n_classes = int(max(classes.max() + 1, len(target_names or ()))) if classes.size else 0
+    n_names = 0 if target_names is None else len(target_names)
+    n_classes = int(max(classes.max() + 1, n_names)) if classes.size else 0
     styles = _class_styles(n_classes)
     for c in classes:
         name = target_names[c] if target_names is not None else str(c)

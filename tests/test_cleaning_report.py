@@ -128,3 +128,20 @@ def test_small_losses_recorded_not_warned(ellipsoid):
     np.testing.assert_allclose(report.vertex_share, 1 / (n + 1))
     assert report.area_share == 0
     assert field.input_to_kept[-1] == -1
+
+
+def test_largest_component_tiny_warns_then_fails_with_a_clear_error(tmp_path):
+    """Many separate triangles far apart (a broken scan): welding cannot join them, the
+    largest component keeps 3 of 300 vertices; the loss is reported and the eigen
+    stage refuses with a message naming the file, never a meaningless diagram."""
+    rng = np.random.default_rng(0)
+    corners = rng.normal(size=(100, 3, 3)) * 0.1 + 10.0 * np.arange(100)[:, None, None]
+    corners[0] *= 1.5  # one triangle larger than the others: a unique largest component
+    path = tmp_path / "broken.ply"
+    trimesh.Trimesh(corners.reshape(-1, 3), np.arange(300).reshape(100, 3), process=False).export(
+        path
+    )
+    lost = r"broken\.ply.*dropped 99% of the vertices.*99 other components"
+    with pytest.warns(MeshCleaningWarning, match=lost):
+        with pytest.raises(ValueError, match=r"^sample 0: eigen_index 3 needs at least 4 vertices"):
+            LaplacianEigenTransformer(eigen_index=(1, 2, 3)).fit_transform([str(path)])

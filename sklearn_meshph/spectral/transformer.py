@@ -357,14 +357,15 @@ class LaplacianEigenTransformer(SampleTransformer):
         fields = []
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
         for i, (clean, values, vectors, complete) in enumerate(results):
+            report = clean.report
+            # First: a mesh reduced to a few vertices is explained before it is refused.
+            warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
             if max(indices) >= len(values):
                 raise ValueError(
                     f"sample {i}: eigen_index {max(indices)} needs at least "
                     f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
                 )
             _warn_if_repeated(values, indices, i, complete)
-            report = clean.report
-            warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
             identity = len(clean.vertices) == report.n_input_vertices
             fields.append(
                 ScalarField(
