@@ -17,13 +17,24 @@ DATA_DIR = Path(
 )
 
 
+def data_folder(name: str, title: str) -> Path:
+    """``$SKLEARN_MESHPH_DATA/name``, or a clean skip when it is absent."""
+    path = DATA_DIR / name
+    if not path.is_dir():
+        pytest.skip(f"{title} data not found at {path} (set SKLEARN_MESHPH_DATA)")
+    return path
+
+
 @pytest.fixture(scope="session")
 def sumner_dir():
-    """The Sumner meshes, or a clean skip when they are absent."""
-    path = DATA_DIR / "sumner"
-    if not path.is_dir():
-        pytest.skip(f"Sumner data not found at {path} (set SKLEARN_MESHPH_DATA)")
-    return path
+    """The Sumner meshes (research data, never bundled)."""
+    return data_folder("sumner", "Sumner")
+
+
+@pytest.fixture(scope="session")
+def watertight_dir():
+    """The SHREC'07 Watertight development half: 200 `.off.gz` meshes, 20 classes."""
+    return data_folder("watertight_dev", "Watertight")
 
 
 @pytest.fixture(scope="session")

@@ -3,7 +3,6 @@
 import bz2
 import gzip
 import lzma
-import os
 import time
 import tracemalloc
 from pathlib import Path
@@ -17,22 +16,7 @@ from sklearn_meshph.datasets import MESH_EXTENSIONS
 from sklearn_meshph.mesh import reading
 from sklearn_meshph.mesh.reading import read_mesh_file, split_compression
 
-DATA_DIR = Path(
-    os.environ.get(
-        "SKLEARN_MESHPH_DATA", Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    )
-)
-
 COMPRESSORS = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}
-
-
-@pytest.fixture(scope="session")
-def watertight_dir():
-    """The SHREC'07 Watertight development half, or a clean skip when it is absent."""
-    path = DATA_DIR / "watertight_dev"
-    if not path.is_dir():
-        pytest.skip(f"Watertight data not found at {path} (set SKLEARN_MESHPH_DATA)")
-    return path
 
 
 @pytest.fixture
