@@ -683,18 +683,18 @@ def _run(args) -> int:
         "warnings": warned,
     }
     summary["timings"] = dict(timings, total=time.perf_counter() - start)
-    written = write_data(
-        args.output,
-        matrix=matrix,
-        diagrams=diagrams,
-        diagram_names=diagram_names,
-        y=y,
-        predicted=predicted,
-        fold_of=fold_of,
-        names=class_names,
-        filenames=filenames,
-        summary=summary,
-    )
+    results = {
+        "matrix": matrix,
+        "diagrams": diagrams,
+        "diagram_names": diagram_names,
+        "y": y,
+        "predicted": predicted,
+        "fold_of": fold_of,
+        "names": class_names,
+        "filenames": filenames,
+        "summary": summary,
+    }
+    written = write_data(args.output, **results)
     timings["results"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - start
     print(f"results in {args.output}: " + ", ".join(p.name for p in written))
