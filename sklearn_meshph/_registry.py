@@ -64,8 +64,9 @@ def all_registries() -> dict[str, Registry]:
     from .persistence.filtrations import FILTRATIONS
     from .spectral.factorization import SOLVERS
     from .spectral.laplacians import LAPLACIANS
+    from .spectral.signatures import SIGNATURES
 
-    return {r.family: r for r in (LAPLACIANS, SOLVERS, FILTRATIONS, METRICS)}
+    return {r.family: r for r in (LAPLACIANS, SOLVERS, SIGNATURES, FILTRATIONS, METRICS)}
 
 
 _BLOCK = re.compile(r"(<!-- registry: (\w+) -->\n)(.*?)(<!-- /registry -->)", re.DOTALL)

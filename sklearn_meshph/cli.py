@@ -51,7 +51,12 @@ from .datasets import MESH_EXTENSIONS, load_mesh_folder, make_shapes
 from .diagrams import METRICS, DiagramDistance
 from .mesh import MeshCleaningWarning
 from .persistence import FILTRATIONS, LowerStarPersistence
-from .spectral import LAPLACIANS, LaplacianEigenTransformer, RepeatedEigenvalueWarning
+from .spectral import (
+    LAPLACIANS,
+    SIGNATURES,
+    LaplacianEigenTransformer,
+    RepeatedEigenvalueWarning,
+)
 
 _DATA_FILES = ("distances.npy", "diagrams.npz", "predictions.csv", "summary.json")
 _MAX_WIDTH = 100
@@ -134,6 +139,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="eigenfunction index (1 = Fiedler vector, the paper's choice) or a comma list",
     )
     _add_option(parser, "--laplacian", LAPLACIANS, LaplacianEigenTransformer().laplacian)
+    _add_option(parser, "--signature", SIGNATURES, LaplacianEigenTransformer().signature)
+    parser.add_argument(
+        "--n-scales",
+        type=int,
+        default=LaplacianEigenTransformer().n_scales,
+        help="times or energies of a signature (--signature hks or wks)",
+    )
     parser.add_argument(
         "--normalization",
         choices=("area", "none"),
@@ -483,6 +495,8 @@ def _save(fig, path: Path) -> Path:
 def _check_options(args) -> None:
     if args.folds < 2:
         raise _UsageError(f"--folds must be at least 2, got {args.folds}")
+    if args.n_scales < 1:
+        raise _UsageError(f"--n-scales must be at least 1, got {args.n_scales}")
     if args.neighbors < 1:
         raise _UsageError(f"--neighbors must be at least 1, got {args.neighbors}")
     if args.path is None and args.n_per_class < 1:
@@ -502,8 +516,10 @@ def _estimators(args):
         normalization=args.normalization,
         n_jobs=args.n_jobs,
         random_state=args.random_state,
+        verbose=args.verbose,
+        signature=args.signature,
+        n_scales=args.n_scales,
     )
-    eigen.set_params(verbose=args.verbose)
     persistence = LowerStarPersistence(
         filtration=args.filtration, n_jobs=args.n_jobs, verbose=args.verbose
     )

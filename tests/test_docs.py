@@ -42,6 +42,7 @@ def test_estimators_and_command_line_offer_exactly_the_registered_options():
     for estimator, family in [
         (LaplacianEigenTransformer, "laplacian"),
         (LaplacianEigenTransformer, "solver"),
+        (LaplacianEigenTransformer, "signature"),
         (LowerStarPersistence, "filtration"),
         (DiagramDistance, "metric"),
     ]:

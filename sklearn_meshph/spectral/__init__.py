@@ -6,16 +6,20 @@
 - :mod:`.factorization`: the factorization backends (registry ``SOLVERS``) over
   :mod:`._cholesky` (our supernodal Cholesky) and SciPy's SuperLU, with the
   fill-reducing order of :mod:`._ordering`;
+- :mod:`.signatures`: heat and wave kernel signatures of the eigenpairs (registry
+  ``SIGNATURES``);
 - :mod:`.transformer`: ``LaplacianEigenTransformer`` and its per-mesh cache.
 """
 
 from .eigensolver import laplacian_eigenfunctions
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
+from .signatures import SIGNATURES
 from .transformer import LaplacianEigenTransformer, RepeatedEigenvalueWarning
 
 __all__ = [
     "LAPLACIANS",
+    "SIGNATURES",
     "SOLVERS",
     "LaplacianEigenTransformer",
     "RepeatedEigenvalueWarning",

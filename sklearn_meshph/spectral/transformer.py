@@ -21,6 +21,7 @@ from ..mesh.validation import check_mesh, where
 from .eigensolver import generalized_eigenpairs
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
+from .signatures import SIGNATURES
 
 __all__ = ["LaplacianEigenTransformer", "RepeatedEigenvalueWarning"]
 
@@ -97,11 +98,17 @@ def _reaches_end(values: np.ndarray, indices) -> bool:
     return any(0 < i <= last and _repeats(values, i)[-1] == last for i in indices)
 
 
-def _eigen_one(mesh, index, *, indices, settings, seed, memory):
+def _block(n: int) -> int:
+    """``n`` rounded up to whole blocks of eigenpairs."""
+    return _EIGS_BLOCK * (-(-n // _EIGS_BLOCK))
+
+
+def _eigen_one(mesh, index, *, indices, n_eigs, settings, seed, memory):
+    """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
+    the block must cover (none for signatures, which do not depend on the basis)."""
     with one_blas_thread():
         vertices, faces = check_mesh(mesh, index=index)
         solve = memory.cache(mesh_eigenpairs, ignore=["index"])
-        n_eigs = _EIGS_BLOCK * (-(-(max(indices) + 3) // _EIGS_BLOCK))
         limit = n_eigs + _MAX_GROWTH
         while True:
             clean, values, vectors = solve(
@@ -204,6 +211,20 @@ class LaplacianEigenTransformer(SampleTransformer):
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the meshes on stderr (needs tqdm,
         the ``progress`` extra); nothing is printed at 0.
+    signature : {"eigenfunctions", "hks", "wks"}, default="eigenfunctions"
+        What each mesh becomes: the eigenfunctions of ``eigen_index``, or a spectral
+        signature of the first ``n_eigenpairs`` eigenpairs (heat or wave kernel
+        signature, see :mod:`sklearn_meshph.spectral.signatures`), one column per scale.
+        Signatures are sums of squared eigenfunctions: independent of eigenvector signs
+        and of the basis of a repeated eigenspace (up to the truncation at
+        ``n_eigenpairs``, which may cut the last eigenspace).
+    n_eigenpairs : int, default=100
+        Eigenpairs (the constant one included) behind a signature; ignored for
+        ``"eigenfunctions"``. Every signature and scale grid with the same value reuses
+        one cached solve per mesh (``memory``).
+    n_scales : int, default=5
+        Times (``"hks"``) or energies (``"wks"``) of a signature, chosen from each
+        mesh's eigenvalues (scale-free at unit area); ignored for ``"eigenfunctions"``.
 
     Attributes
     ----------
@@ -256,6 +277,9 @@ class LaplacianEigenTransformer(SampleTransformer):
         "random_state": ["random_state"],
         "solver": [Options(SOLVERS)],
         "verbose": [Interval(Integral, 0, None, closed="left")],
+        "signature": [Options(SIGNATURES)],
+        "n_eigenpairs": [Interval(Integral, 2, None, closed="left")],
+        "n_scales": [Interval(Integral, 1, None, closed="left")],
     }
 
     def __init__(
@@ -270,6 +294,9 @@ class LaplacianEigenTransformer(SampleTransformer):
         random_state=0,
         solver="auto",
         verbose=0,
+        signature="eigenfunctions",
+        n_eigenpairs=100,
+        n_scales=5,
     ):
         self.eigen_index = eigen_index
         self.laplacian = laplacian
@@ -281,6 +308,9 @@ class LaplacianEigenTransformer(SampleTransformer):
         self.random_state = random_state
         self.solver = solver
         self.verbose = verbose
+        self.signature = signature
+        self.n_eigenpairs = n_eigenpairs
+        self.n_scales = n_scales
 
     def _indices(self) -> tuple[int, ...]:
         if isinstance(self.eigen_index, tuple):
@@ -334,6 +364,11 @@ class LaplacianEigenTransformer(SampleTransformer):
         # Largest meshes first: workers that finish early pick up the small ones, so a
         # collection of mixed sizes keeps every worker busy to the end.
         order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
+        signature = SIGNATURES[self.signature].value
+        if signature is None:
+            n_eigs, tracked = _block(max(indices) + 3), indices
+        else:
+            n_eigs, tracked = _block(self.n_eigenpairs), ()
         settings = {
             "laplacian": self.laplacian,
             "normalization": self.normalization,
@@ -346,7 +381,13 @@ class LaplacianEigenTransformer(SampleTransformer):
         with one_blas_thread():
             tasks = parallel(self.n_jobs)(
                 delayed(_eigen_one)(
-                    meshes[i], i, indices=indices, settings=settings, seed=seed, memory=memory
+                    meshes[i],
+                    i,
+                    indices=tracked,
+                    n_eigs=n_eigs,
+                    settings=settings,
+                    seed=seed,
+                    memory=memory,
                 )
                 for i in order
             )
@@ -360,19 +401,25 @@ class LaplacianEigenTransformer(SampleTransformer):
             report = clean.report
             # First: a mesh reduced to a few vertices is explained before it is refused.
             warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
-            if max(indices) >= len(values):
+            if signature is not None:
+                if len(values) < 2:
+                    raise ValueError(f"sample {i}: the cleaned mesh has too few vertices")
+                field_values, field_eigenvalues = signature(values, vectors, self.n_scales), None
+            elif max(indices) >= len(values):
                 raise ValueError(
                     f"sample {i}: eigen_index {max(indices)} needs at least "
                     f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
                 )
-            _warn_if_repeated(values, indices, i, complete)
+            else:
+                _warn_if_repeated(values, indices, i, complete)
+                field_values, field_eigenvalues = vectors[:, column], values[column]
             identity = len(clean.vertices) == report.n_input_vertices
             fields.append(
                 ScalarField(
                     vertices=clean.vertices,
                     faces=clean.faces,
-                    values=vectors[:, column],
-                    eigenvalues=values[column],
+                    values=field_values,
+                    eigenvalues=field_eigenvalues,
                     vertex_indices=None if identity else clean.vertex_indices,
                     input_to_kept=None if identity else clean.input_to_kept,
                     cleaning=report if report.dropped else None,
