@@ -9,6 +9,7 @@ persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
 beside them.
 """
 
+from .combine import FeatureDistance
 from .datasets import load_mesh_folder, make_shapes
 from .diagrams import (
     DiagramDistance,
@@ -34,6 +35,7 @@ from .persistence import LowerStarPersistence, lower_star_persistence
 from .spectral import (
     LaplacianEigenTransformer,
     RepeatedEigenvalueWarning,
+    ShapeDNA,
     cotangent_laplacian,
     graph_laplacian,
     laplacian_eigenfunctions,
@@ -44,11 +46,13 @@ __version__ = "0.1.0.dev0"
 __all__ = [
     "CleaningReport",
     "DiagramDistance",
+    "FeatureDistance",
     "LaplacianEigenTransformer",
     "LowerStarPersistence",
     "MeshCleaningWarning",
     "RepeatedEigenvalueWarning",
     "ScalarField",
+    "ShapeDNA",
     "bottleneck_distance",
     "check_mesh",
     "clean_mesh",

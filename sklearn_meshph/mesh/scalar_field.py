@@ -50,6 +50,9 @@ class ScalarField:
     cleaning : CleaningReport, optional
         What cleaning dropped from the input mesh, and why; ``None`` when nothing was
         dropped (welding alone is not dropping).
+    spectrum : ndarray of shape (n_eigenpairs,), optional
+        Every eigenvalue the eigen stage solved for this mesh, ascending, the constant
+        eigenfunction's first (at unit area by default): what :class:`ShapeDNA` reads.
 
     Examples
     --------
@@ -69,6 +72,7 @@ class ScalarField:
     vertex_indices: np.ndarray | None = field(default=None, repr=False)
     input_to_kept: np.ndarray | None = field(default=None, repr=False)
     cleaning: CleaningReport | None = field(default=None, repr=False)
+    spectrum: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         vertices = check_vertices(self.vertices, "ScalarField")
@@ -85,6 +89,11 @@ class ScalarField:
             object.__setattr__(
                 self, "eigenvalues", np.atleast_1d(np.asarray(self.eigenvalues, np.float64))
             )
+        if self.spectrum is not None:
+            spectrum = np.asarray(self.spectrum, dtype=np.float64)
+            if spectrum.ndim != 1 or not np.isfinite(spectrum).all():
+                raise ValueError("ScalarField: spectrum must be a finite 1-D array")
+            object.__setattr__(self, "spectrum", _frozen(spectrum))
         if self.vertex_indices is not None:
             object.__setattr__(self, "vertex_indices", np.asarray(self.vertex_indices))
         if self.input_to_kept is not None:

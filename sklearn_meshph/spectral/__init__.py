@@ -8,12 +8,14 @@
   fill-reducing order of :mod:`._ordering`;
 - :mod:`.signatures`: heat and wave kernel signatures of the eigenpairs (registry
   ``SIGNATURES``);
+- :mod:`.shape_dna`: ``ShapeDNA``, the spectrum as a feature vector;
 - :mod:`.transformer`: ``LaplacianEigenTransformer`` and its per-mesh cache.
 """
 
 from .eigensolver import laplacian_eigenfunctions
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
+from .shape_dna import ShapeDNA
 from .signatures import SIGNATURES
 from .transformer import LaplacianEigenTransformer, RepeatedEigenvalueWarning
 
@@ -23,6 +25,7 @@ __all__ = [
     "SOLVERS",
     "LaplacianEigenTransformer",
     "RepeatedEigenvalueWarning",
+    "ShapeDNA",
     "cotangent_laplacian",
     "graph_laplacian",
     "laplacian_eigenfunctions",

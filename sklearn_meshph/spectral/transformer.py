@@ -32,6 +32,8 @@ _EIGS_BLOCK = 8
 # warning can state the whole multiplicity, by at most this many eigenpairs: beyond it
 # (a "book" of many triangles on one edge) the warning says "at least".
 _MAX_GROWTH = 4 * _EIGS_BLOCK
+# Eigenpairs behind a signature unless n_eigenpairs says otherwise.
+_SIGNATURE_EIGENPAIRS = 100
 # Eigenvalues closer than this (relative) count as one repeated eigenvalue.
 _REPEATED_RTOL = 1e-3
 
@@ -218,10 +220,12 @@ class LaplacianEigenTransformer(SampleTransformer):
         Signatures are sums of squared eigenfunctions: independent of eigenvector signs
         and of the basis of a repeated eigenspace (up to the truncation at
         ``n_eigenpairs``, which may cut the last eigenspace).
-    n_eigenpairs : int, default=100
-        Eigenpairs (the constant one included) behind a signature; ignored for
-        ``"eigenfunctions"``. Every signature and scale grid with the same value reuses
-        one cached solve per mesh (``memory``).
+    n_eigenpairs : int, default=None
+        Eigenpairs to solve, the constant one included: behind a signature (``None``:
+        100), or at least as many as the eigenfunctions need (``None``: the block
+        that covers ``eigen_index``). Every field keeps them all as ``spectrum`` (for
+        :class:`ShapeDNA`). A grid over signatures, scales and indices with the same
+        value reuses one cached solve per mesh (``memory``).
     n_scales : int, default=5
         Times (``"hks"``) or energies (``"wks"``) of a signature, chosen from each
         mesh's eigenvalues (scale-free at unit area); ignored for ``"eigenfunctions"``.
@@ -278,7 +282,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "solver": [Options(SOLVERS)],
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "signature": [Options(SIGNATURES)],
-        "n_eigenpairs": [Interval(Integral, 2, None, closed="left")],
+        "n_eigenpairs": [Interval(Integral, 2, None, closed="left"), None],
         "n_scales": [Interval(Integral, 1, None, closed="left")],
     }
 
@@ -295,7 +299,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         solver="auto",
         verbose=0,
         signature="eigenfunctions",
-        n_eigenpairs=100,
+        n_eigenpairs=None,
         n_scales=5,
     ):
         self.eigen_index = eigen_index
@@ -366,9 +370,9 @@ class LaplacianEigenTransformer(SampleTransformer):
         order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
         signature = SIGNATURES[self.signature].value
         if signature is None:
-            n_eigs, tracked = _block(max(indices) + 3), indices
+            n_eigs, tracked = _block(max(max(indices) + 3, self.n_eigenpairs or 0)), indices
         else:
-            n_eigs, tracked = _block(self.n_eigenpairs), ()
+            n_eigs, tracked = _block(self.n_eigenpairs or _SIGNATURE_EIGENPAIRS), ()
         settings = {
             "laplacian": self.laplacian,
             "normalization": self.normalization,
@@ -423,6 +427,7 @@ class LaplacianEigenTransformer(SampleTransformer):
                     vertex_indices=None if identity else clean.vertex_indices,
                     input_to_kept=None if identity else clean.input_to_kept,
                     cleaning=report if report.dropped else None,
+                    spectrum=values,
                 )
             )
         return fields
