@@ -9,7 +9,7 @@ persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
 beside them.
 """
 
-from .combine import FeatureDistance
+from .combine import CombinedDistance, FeatureDistance
 from .datasets import load_mesh_folder, make_shapes
 from .diagrams import (
     DiagramDistance,
@@ -44,6 +44,7 @@ from .spectral import (
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "CombinedDistance",
     "CleaningReport",
     "DiagramDistance",
     "FeatureDistance",
