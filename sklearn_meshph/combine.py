@@ -234,6 +234,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : sequence of samples
+            What every part takes, e.g. the fields of the eigen stage.
         y : ignored
 
         Returns
@@ -249,6 +250,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : sequence of samples
+            Of the kind the parts were fitted on.
 
         Returns
         -------

@@ -66,6 +66,7 @@ class ShapeDNA(SampleTransformer):
         Parameters
         ----------
         X : sequence of ScalarField
+            Fields of :class:`LaplacianEigenTransformer`, which carry a ``spectrum``.
         y : ignored
 
         Returns
