@@ -16,6 +16,7 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    cotangent_laplacian,
     laplacian_eigenfunctions,
 )
 from sklearn_meshph.spectral.signatures import (
@@ -78,7 +79,7 @@ def test_signatures_do_not_depend_on_signs_or_on_the_basis_of_an_eigenspace(unit
     )
 
 
-@pytest.mark.parametrize("signature", ["hks", "wks"])
+@pytest.mark.parametrize("signature", ["hks", "log-hks", "wks"])
 def test_signatures_are_invariant_to_scale_rotation_and_nearly_to_resolution(signature):
     vertices, faces = irregular_ellipsoid(3, seed=1)
     est = LaplacianEigenTransformer(signature=signature, n_eigenpairs=40, n_scales=4)
@@ -92,8 +93,29 @@ def test_signatures_are_invariant_to_scale_rotation_and_nearly_to_resolution(sig
     # vertices agree to discretization error.
     fine_v, fine_f = trimesh.remesh.subdivide(vertices, faces)
     fine = est.fit_transform([(fine_v, fine_f)])[0].values[: len(vertices)]
-    relative = np.abs(fine - reference).max(axis=0) / np.abs(reference).max(axis=0)
-    assert relative.max() < 0.05, relative
+    if signature == "log-hks":  # a log: compare the ratio of the signatures, exp(diff)
+        relative = np.abs(fine - reference).max(axis=0)
+    else:
+        relative = np.abs(fine - reference).max(axis=0) / np.abs(reference).max(axis=0)
+    tolerance = 0.1 if signature == "log-hks" else 0.05
+    assert relative.max() < tolerance, relative
+
+
+def test_log_hks_is_the_log_of_hks_over_the_heat_trace():
+    vertices, faces = irregular_ellipsoid(3, seed=5)
+    hks, log_hks = (
+        LaplacianEigenTransformer(signature=s, n_eigenpairs=30, n_scales=3).fit_transform(
+            [(vertices, faces)]
+        )[0]
+        for s in ("hks", "log-hks")
+    )
+    values = hks.spectrum
+    times = hks_times(values, 3)
+    trace = np.exp(-np.outer(values, times)).sum(axis=0)
+    np.testing.assert_allclose(log_hks.values, np.log(hks.values / trace), rtol=1e-12)
+    # At unit area the trace is the HKS's mass-weighted mean (M-orthonormal eigenvectors).
+    mass = cotangent_laplacian(vertices, faces)[1].diagonal()
+    np.testing.assert_allclose(mass @ hks.values / mass.sum(), trace, rtol=1e-10)
 
 
 def test_fields_have_one_column_per_scale_and_feed_persistence():
@@ -118,7 +140,7 @@ def test_a_grid_over_signatures_and_scales_solves_each_mesh_once(tmp_path: Path)
         KNeighborsClassifier(1, metric="precomputed"),
     )
     grid = {
-        "laplacianeigentransformer__signature": ["hks", "wks"],
+        "laplacianeigentransformer__signature": ["hks", "log-hks", "wks"],
         "laplacianeigentransformer__n_scales": [2, 3],
     }
     GridSearchCV(pipe, grid, cv=3).fit(meshes, y)

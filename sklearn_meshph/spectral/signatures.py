@@ -6,6 +6,9 @@ constant one first) and one entry in :data:`SIGNATURES`:
 
 - ``"hks"``, the heat kernel signature ``sum_k exp(-lambda_k t) phi_k(x)^2`` (Sun,
   Ovsjanikov and Guibas, 2009) at ``size`` times;
+- ``"log-hks"``, ``log(HKS(x, t) / sum_k exp(-lambda_k t))``: the HKS over its mean on
+  the unit-area surface, in log scale, so that every time's column is on the same
+  footing;
 - ``"wks"``, the wave kernel signature (Aubry, Schlickewei and Cremers, 2011): the
   probability of a quantum particle of log-energy ``e`` to be at ``x``, at ``size``
   energies.
@@ -123,6 +126,16 @@ def _hks(eigenvalues, eigenvectors, size):
     return heat_kernel_signature(eigenvalues, eigenvectors, hks_times(eigenvalues, size))
 
 
+def _log_hks(eigenvalues, eigenvectors, size):
+    """``log(HKS(x, t) / trace(t))``, the heat trace ``sum_k exp(-lambda_k t)`` being the
+    HKS's mean over the unit-area surface: each time's column is centred on 0 in log
+    scale, so the times weigh alike in a distance."""
+    times = hks_times(eigenvalues, size)
+    hks = heat_kernel_signature(eigenvalues, eigenvectors, times)
+    trace = np.exp(-np.outer(np.asarray(eigenvalues, dtype=np.float64), times)).sum(axis=0)
+    return np.log(np.maximum(hks, np.finfo(float).tiny) / trace)
+
+
 def _wks(eigenvalues, eigenvectors, size):
     return wave_kernel_signature(eigenvalues, eigenvectors, *wks_energies(eigenvalues, size))
 
@@ -142,6 +155,12 @@ SIGNATURES = Registry(
             "heat kernel signature at `n_scales` times log-spaced from `4 ln 10 / "
             "lambda_max` to `4 ln 10 / lambda_1`; independent of signs and of the basis "
             "of repeated eigenspaces",
+        ),
+        Option(
+            "log-hks",
+            _log_hks,
+            "log of the heat kernel signature over the heat trace (its mean on the "
+            "unit-area surface), at the times of `hks`: each time centred in log scale",
         ),
         Option(
             "wks",

@@ -213,7 +213,7 @@ class LaplacianEigenTransformer(SampleTransformer):
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the meshes on stderr (needs tqdm,
         the ``progress`` extra); nothing is printed at 0.
-    signature : {"eigenfunctions", "hks", "wks"}, default="eigenfunctions"
+    signature : {"eigenfunctions", "hks", "log-hks", "wks"}, default="eigenfunctions"
         What each mesh becomes: the eigenfunctions of ``eigen_index``, or a spectral
         signature of the first ``n_eigenpairs`` eigenpairs (heat or wave kernel
         signature, see :mod:`sklearn_meshph.spectral.signatures`), one column per scale.
