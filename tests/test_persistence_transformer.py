@@ -150,3 +150,21 @@ def test_invalid_parameters_are_refused_at_fit():
         LowerStarPersistence(filtration="upper").fit(sample)
     with pytest.raises(ValueError, match="min_persistence"):
         LowerStarPersistence(min_persistence=-1.0).fit(sample)
+
+
+def test_parts_keep_the_named_diagrams_of_each_function():
+    sphere = trimesh.creation.icosphere(2)
+    values = np.column_stack([sphere.vertices[:, 0], sphere.vertices[:, 1] ** 2])
+    sample = [(sphere, values)]
+    full = LowerStarPersistence(filtration="extended").fit_transform(sample)[0]
+    parts = ("superlevel H0 (saddle, max)", "essential H1")
+    est = LowerStarPersistence(filtration="extended", parts=parts)
+    kept = est.fit_transform(sample)[0]
+    assert len(kept) == 4
+    for got, expected in zip(kept, (full[1], full[3], full[5], full[7]), strict=True):
+        np.testing.assert_array_equal(got, expected)
+    assert est.diagram_names(2) == [f"f{k}: {p}" for k in (1, 2) for p in parts]
+    single = LowerStarPersistence(filtration="extended", parts=("(min, max)",))
+    np.testing.assert_array_equal(single.fit_transform([(sphere, values[:, 0])])[0], full[2])
+    with pytest.raises(ValueError, match=r"parts must be .*'symmetric'.*got \('ordinary H0',\)"):
+        LowerStarPersistence(parts=("ordinary H0",)).fit_transform(sample)

@@ -34,23 +34,22 @@ def _sample_arrays(sample, index):
     )
 
 
-def _diagrams_one(sample, index, *, filtration, essential, min_persistence):
+def _diagrams_one(sample, index, *, filtration, essential, min_persistence, keep):
     faces, n_vertices, values = _sample_arrays(sample, index)
     adjacency = mesh_edges(faces, n_vertices)
     needs_surface = FILTRATIONS[filtration].value.needs_surface
     surface = closed_surface(faces, adjacency) if needs_surface else None
     diagrams = []
     for column in ScalarField.columns_of(values):
-        diagrams.extend(
-            function_diagrams(
-                adjacency,
-                np.ascontiguousarray(column),
-                filtration=filtration,
-                essential=essential,
-                min_persistence=min_persistence,
-                surface=surface,
-            )
+        per_function = function_diagrams(
+            adjacency,
+            np.ascontiguousarray(column),
+            filtration=filtration,
+            essential=essential,
+            min_persistence=min_persistence,
+            surface=surface,
         )
+        diagrams.extend(per_function[k] for k in keep)
     return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
 
 
@@ -91,6 +90,13 @@ class LowerStarPersistence(SampleTransformer):
     min_persistence : float, default=0.0
         Pairs with ``death - birth <= min_persistence`` are dropped (zero-persistence
         pairs always are).
+    parts : tuple of str, default=None
+        Keep only these diagrams of each function, by the names of
+        :meth:`diagram_names` for one function (``None``: all). For example
+        ``filtration="extended", parts=("superlevel H0 (saddle, max)", "essential H1")``
+        drops the ordinary H0 pairs and the components' ranges; several
+        ``LowerStarPersistence`` with different parts, in a :class:`CombinedDistance`,
+        weigh each kind of diagram on its own.
     n_jobs : int, default=None
         Samples processed in parallel. ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors.
@@ -154,6 +160,7 @@ class LowerStarPersistence(SampleTransformer):
         "min_persistence": [Interval(Real, 0, None, closed="left")],
         "n_jobs": [Integral, None],
         "verbose": [Interval(Integral, 0, None, closed="left")],
+        "parts": [tuple, None],
     }
 
     def __init__(
@@ -163,12 +170,31 @@ class LowerStarPersistence(SampleTransformer):
         min_persistence=0.0,
         n_jobs=None,
         verbose=0,
+        parts=None,
     ):
         self.filtration = filtration
         self.essential = essential
         self.min_persistence = min_persistence
         self.n_jobs = n_jobs
         self.verbose = verbose
+        self.parts = parts
+
+    def _keep(self) -> list[int]:
+        """Positions, among one function's diagrams, of those ``parts`` keeps."""
+        names = FILTRATIONS[self.filtration].value.diagram_names
+        if self.parts is None:
+            return list(range(len(names)))
+        unknown = [p for p in self.parts if p not in names]
+        if unknown or not self.parts:
+            raise ValueError(
+                f"parts must be a non-empty tuple of the diagrams of filtration="
+                f"{self.filtration!r}: {names}; got {self.parts!r}"
+            )
+        return [k for k, name in enumerate(names) if name in self.parts]
+
+    def _check_params(self) -> None:
+        super()._check_params()
+        self._keep()
 
     def transform(self, X):
         """Compute the persistence diagram(s) of every sample.
@@ -185,6 +211,7 @@ class LowerStarPersistence(SampleTransformer):
         """
         self._check_params()
         samples = self._check_samples(X)
+        keep = self._keep()
         results = parallel(self.n_jobs)(
             delayed(_diagrams_one)(
                 sample,
@@ -192,6 +219,7 @@ class LowerStarPersistence(SampleTransformer):
                 filtration=self.filtration,
                 essential=self.essential,
                 min_persistence=float(self.min_persistence),
+                keep=keep,
             )
             for i, sample in enumerate(samples)
         )
@@ -209,7 +237,8 @@ class LowerStarPersistence(SampleTransformer):
         -------
         list of str
         """
-        per_function = list(FILTRATIONS[self.filtration].value.diagram_names)
+        names = FILTRATIONS[self.filtration].value.diagram_names
+        per_function = [names[k] for k in self._keep()]
         if n_functions == 1:
             return per_function
         return [f"f{k + 1}: {name}" for k in range(n_functions) for name in per_function]
