@@ -117,7 +117,8 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         distances on the fitted samples, learned by ``fit``: parts measured in different
         units (a bottleneck distance of unit-area eigenfunctions, a sum of relative
         eigenvalue differences) then weigh alike at weight 1, whatever their scales, and
-        the median ignores the outliers that a maximum or a mean would follow.
+        the median ignores the outliers that a maximum or a mean would follow. A part
+        with no positive distance among the fitted samples is divided by 1.
         ``"none"`` adds the raw matrices.
 
     Attributes
@@ -224,9 +225,9 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
             return 1.0
         off = matrix[~np.eye(*matrix.shape, dtype=bool)] if matrix.ndim == 2 else matrix
         finite = off[np.isfinite(off) & (off > 0)]
-        if not finite.size:
-            raise ValueError(f"part {name!r}: no positive finite distance to normalize by")
-        return float(np.median(finite))
+        # A part that tells no fitted pair apart (e.g. essential H1 on genus-0 shapes
+        # only) adds nothing: any divisor will do.
+        return float(np.median(finite)) if finite.size else 1.0
 
     def fit(self, X, y=None):
         """Fit every part on ``X`` and learn its normalization.

@@ -103,3 +103,16 @@ def test_bad_settings_are_refused(fields_and_labels):
         CombinedDistance(parts() + parts()).fit(fields)
     with pytest.raises(ValueError, match="normalization"):
         CombinedDistance(parts(), normalization="max").fit(fields)
+
+
+def test_a_part_that_separates_nothing_adds_nothing(fields_and_labels):
+    """Essential H1 of genus-0 shapes: every distance is 0; the part must not fail."""
+    fields, _ = fields_and_labels
+    h1 = make_pipeline(
+        LowerStarPersistence(filtration="extended", parts=("essential H1",)), DiagramDistance()
+    )
+    dna = make_pipeline(ShapeDNA(n_eigenvalues=20), FeatureDistance())
+    combined = CombinedDistance([("h1", h1), ("dna", dna)]).fit(fields[:8])
+    assert combined.scales_["h1"] == 1.0
+    alone = CombinedDistance([("dna", dna)]).fit(fields[:8])
+    np.testing.assert_allclose(combined.transform(fields[8:]), alone.transform(fields[8:]))
