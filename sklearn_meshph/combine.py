@@ -217,10 +217,10 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         matrices = [part.fit_transform(X) for _, part in self.parts_]
         self.scales_ = {}
         for (name, _), matrix in zip(self.parts_, matrices, strict=True):
-            self.scales_[name] = self._scale(name, np.asarray(matrix, float))
+            self.scales_[name] = self._scale(np.asarray(matrix, float))
         return self._combine(matrices)
 
-    def _scale(self, name, matrix) -> float:
+    def _scale(self, matrix) -> float:
         if self.normalization == "none":
             return 1.0
         off = matrix[~np.eye(*matrix.shape, dtype=bool)] if matrix.ndim == 2 else matrix
