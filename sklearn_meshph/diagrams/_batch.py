@@ -14,7 +14,7 @@ import numpy as np
 from ._bottleneck import SMALL_PAIRS, bottleneck_finite, bottleneck_small
 from ._wasserstein import power, power_of_two_above, wasserstein_scaled
 
-__all__ = ["pack", "pair_distances"]
+__all__ = ["pack", "pack_one", "pair_distances", "split_diagram"]
 
 BOTTLENECK, WASSERSTEIN = 0, 1
 
@@ -94,6 +94,24 @@ def _wasserstein_pairs(left, right, rows, cols, n_parts, order, internal_p):
     return out
 
 
+def split_diagram(diagram: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The finite points of a validated diagram, and the sorted births of its essential
+    points (matched among themselves by sorted birth)."""
+    keep = np.isfinite(diagram[:, 1])
+    return diagram[keep], np.sort(diagram[~keep, 0])
+
+
+def pack_one(diagram: np.ndarray):
+    """``pack([(diagram,)])`` without the lists, for the distance of a single pair."""
+    points, births = split_diagram(diagram)
+    return (
+        np.ascontiguousarray(points),
+        np.array([0, len(points)]),
+        births,
+        np.array([0, len(births)]),
+    )
+
+
 def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validated samples (tuples of diagrams) as four flat arrays for the kernels.
 
@@ -103,9 +121,9 @@ def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     finite, essential = [], []
     for sample in samples:
         for diagram in sample:
-            keep = np.isfinite(diagram[:, 1])
-            finite.append(diagram[keep])
-            essential.append(np.sort(diagram[~keep, 0]))
+            points, births = split_diagram(diagram)
+            finite.append(points)
+            essential.append(births)
     offsets = np.concatenate([[0], np.cumsum([len(d) for d in finite])]).astype(np.int64)
     essential_offsets = np.concatenate([[0], np.cumsum([len(e) for e in essential])])
     points = np.ascontiguousarray(np.vstack(finite)) if finite else np.empty((0, 2))

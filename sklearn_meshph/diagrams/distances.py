@@ -10,7 +10,7 @@ import numpy as np
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
 from ._assignment import DIAGONAL, precedes
-from ._batch import BOTTLENECK, WASSERSTEIN, pair_distances
+from ._batch import BOTTLENECK, WASSERSTEIN, pack_one, pair_distances
 from ._bottleneck import bottleneck_finite, bottleneck_partners
 from ._wasserstein import transport
 from .validation import check_diagram
@@ -61,20 +61,12 @@ def kernel_metric(metric: str, order: float, internal_p: float) -> tuple[int, fl
     return code, order
 
 
-def _pack_one(diagram):
-    """``pack([(diagram,)])`` without the generality, for one pair of diagrams."""
-    finite = np.isfinite(diagram[:, 1])
-    points = np.ascontiguousarray(diagram[finite])
-    births = np.sort(diagram[~finite, 0])
-    return points, np.array([0, len(points)]), births, np.array([0, len(births)])
-
-
 def _one_pair(a, b, metric, order=2.0, internal_p=np.inf) -> float:
     a, b = check_diagram(a, index=0), check_diagram(b, index=1)
     zero = np.zeros(1, dtype=np.int64)
     code, order = kernel_metric(metric, order, internal_p)
     return float(
-        pair_distances(_pack_one(a), _pack_one(b), zero, zero, 1, code, order, internal_p)[0]
+        pair_distances(pack_one(a), pack_one(b), zero, zero, 1, code, order, internal_p)[0]
     )
 
 

@@ -1,0 +1,209 @@
+"""What the main job reports: the confusion summary, the data files and the pictures."""
+
+from __future__ import annotations
+
+import csv
+import json
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from sklearn.metrics import confusion_matrix
+
+DATA_FILES = ("distances.npy", "diagrams.npz", "predictions.csv", "summary.json")
+MAX_WIDTH = 100
+
+
+def format_confusion(y, predicted, names, max_width: int = MAX_WIDTH) -> str:
+    """The confusion matrix in lines of at most ``max_width`` characters.
+
+    Up to 8 classes: the whole matrix (class names shortened to ``c0, c1, ...`` with a
+    key when they do not fit). More: the accuracy of each class, what it is most often
+    mistaken for, and the most confused pairs.
+    """
+    n = len(names)
+    matrix = confusion_matrix(y, predicted, labels=np.arange(n))
+    if n > 8:
+        return _confusion_summary(matrix, names, max_width)
+    width = max(3, len(str(matrix.max())))
+    fit = (max_width - 3) // (n + 1) - 1
+    longest = max(len(str(name)) for name in names)
+    if longest <= fit:
+        labels, key = [str(name) for name in names], []
+        width = max(width, longest)
+    else:
+        labels = [f"c{i}" for i in range(n)]
+        key = [_clip(f"  c{i} = {name}", max_width) for i, name in enumerate(names)]
+        width = max(width, *(len(label) for label in labels))
+    lines = [" " * width + " | " + " ".join(f"{label:>{width}}" for label in labels)]
+    lines.append("-" * len(lines[0]))
+    for label, row in zip(labels, matrix, strict=True):
+        lines.append(f"{label:>{width}} | " + " ".join(f"{v:>{width}d}" for v in row))
+    if key:
+        lines += ["key:"] + key
+    return "\n".join(lines)
+
+
+def _clip(text: str, width: int) -> str:
+    """``text`` in at most ``width`` characters, keeping its start and its end (names
+    often differ only at the end)."""
+    if len(text) <= width:
+        return text
+    tail = (width - 3) // 2
+    return text[: width - 3 - tail] + "..." + text[len(text) - tail :]
+
+
+def _confusion_summary(matrix, names, max_width) -> str:
+    name_width = min(34, max(5, *(len(str(name)) for name in names)))
+    lines = [f"{'class':<{name_width}}  correct  accuracy  most often mistaken for"]
+    for c, name in enumerate(names):
+        row = matrix[c]
+        total = int(row.sum())
+        wrong = row.copy()
+        wrong[c] = 0
+        other = (
+            f"{_clip(str(names[int(np.argmax(wrong))]), 34)} ({int(wrong.max())})"
+            if wrong.max() > 0
+            else "-"
+        )
+        accuracy = f"{row[c] / total:.2f}" if total else "-"
+        line = (
+            f"{_clip(str(name), name_width):<{name_width}}  {f'{row[c]}/{total}':>7}  "
+            f"{accuracy:>8}  {other}"
+        )
+        lines.append(_clip(line, max_width))
+    off = matrix.copy()
+    np.fill_diagonal(off, 0)
+    pairs = [(int(off[i, j]), i, j) for i, j in zip(*np.nonzero(off), strict=True)]
+    pairs.sort(key=lambda p: (-p[0], p[1], p[2]))
+    if pairs:
+        lines.append("most confused pairs (true -> predicted: count)")
+        for count, i, j in pairs[:10]:
+            line = f"  {_clip(str(names[i]), 40)} -> {_clip(str(names[j]), 40)}: {count}"
+            lines.append(_clip(line, max_width))
+    return "\n".join(lines)
+
+
+def wrap(text: str, width: int = MAX_WIDTH) -> str:
+    return "\n".join(textwrap.wrap(text, width, subsequent_indent="  ", break_long_words=False))
+
+
+def _finite(matrix: np.ndarray) -> np.ndarray:
+    """Infinite distances (different numbers of essential classes) capped for t-SNE."""
+    finite = matrix[np.isfinite(matrix)]
+    cap = 2.0 * finite.max() if finite.size and finite.max() > 0 else 1.0
+    return np.where(np.isfinite(matrix), matrix, cap)
+
+
+def write_data(
+    output: Path,
+    *,
+    matrix,
+    diagrams,
+    diagram_names,
+    y,
+    predicted,
+    fold_of,
+    names,
+    filenames,
+    summary,
+) -> list[Path]:
+    """The result files (see the module docstring); returns their paths."""
+    output.mkdir(parents=True, exist_ok=True)
+    paths = [output / name for name in DATA_FILES]
+    np.save(paths[0], np.asarray(matrix, dtype=np.float64))
+    arrays = {}
+    for i, sample in enumerate(diagrams):
+        parts = sample if isinstance(sample, tuple) else (sample,)
+        for k, d in enumerate(parts):
+            arrays[f"sample_{i}_diagram_{k}"] = np.asarray(d, dtype=np.float64).reshape(-1, 2)
+    np.savez(
+        paths[1],
+        filenames=np.asarray(filenames, dtype=str),
+        labels=np.asarray(y),
+        target_names=np.asarray(names, dtype=str),
+        diagram_names=np.asarray(diagram_names, dtype=str),
+        **arrays,
+    )
+    with open(paths[2], "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(["index", "file", "true label", "predicted label", "fold"])
+        for i in range(len(y)):
+            writer.writerow([i, filenames[i], names[y[i]], names[predicted[i]], int(fold_of[i])])
+    summary = dict(summary, files=[p.name for p in paths])
+    with open(paths[3], "w", encoding="utf-8") as f:
+        json.dump(summary, f, indent=2, default=_json_default)
+        f.write("\n")
+    return paths
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray | tuple):
+        return list(value)
+    return str(value)
+
+
+def write_pictures(
+    output: Path, matrix, y, names, fields, diagrams, labels, random_state, eigen_index=None
+):
+    from sklearn.manifold import TSNE
+
+    from . import plotting
+
+    output.mkdir(parents=True, exist_ok=True)
+    plt = plotting._pyplot()
+    written = []
+    n_classes = len(names)
+    if len(y) > 2:
+        perplexity = min(30.0, max(1.0, (len(y) - 1) / 3.0))
+        embedding = TSNE(
+            metric="precomputed", init="random", perplexity=perplexity, random_state=random_state
+        ).fit_transform(_finite(matrix))
+        legend_cols = 1 if n_classes <= 20 else 2
+        fig, ax = plt.subplots(figsize=(6 + 1.8 * legend_cols, 5))
+        plotting.plot_embedding(embedding, y, names, ax=ax)
+        ax.set_title("t-SNE of the diagram distance matrix")
+        written.append(_save(fig, output / "tsne.png"))
+
+    examples = [int(np.flatnonzero(y == c)[0]) for c in range(n_classes)]
+    cols = min(3 if n_classes <= 9 else 5, len(examples))
+    rows = -(-len(examples) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows), squeeze=False)
+    for ax, i in zip(axes.ravel(), examples, strict=False):
+        plotting.plot_diagram(diagrams[i], ax=ax, labels=labels)
+        ax.set_title(_clip(str(names[y[i]]), 40))
+    for ax in axes.ravel()[len(examples) :]:
+        ax.set_axis_off()
+    written.append(_save(fig, output / "diagrams.png"))
+
+    index = eigen_index[0] if isinstance(eigen_index, tuple) else eigen_index
+    which = f"eigenfunction {index}" if index is not None else "eigenfunction"
+    fig = plt.figure(figsize=(4 * cols, 3.6 * rows))
+    for k, i in enumerate(examples):
+        ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
+        field = fields[i]
+        values = field.columns()[0]
+        plotting.plot_mesh_function(
+            field.vertices, field.faces, values, ax=ax, colorbar_label=f"{which} value"
+        )
+        ax.set_title(f"{_clip(str(names[y[i]]), 30)}: {which}", fontsize=9)
+    shown = (
+        f" (the first of eigen_index {', '.join(map(str, eigen_index))})"
+        if isinstance(eigen_index, tuple)
+        else ""
+    )
+    fig.suptitle(f"Laplacian {which}{shown}, first sample of each class")
+    written.append(_save(fig, output / "eigenfunctions.png"))
+    return written
+
+
+def _save(fig, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    fig.clf()
+    return path
+
+
+# The main job ------------------------------------------------------------------------
