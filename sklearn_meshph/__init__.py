@@ -32,6 +32,7 @@ from .mesh import (
     weld_vertices,
 )
 from .persistence import LowerStarPersistence, lower_star_persistence
+from .pipelines import make_mesh_distance
 from .spectral import (
     LaplacianEigenTransformer,
     RepeatedEigenvalueWarning,
@@ -65,6 +66,7 @@ __all__ = [
     "laplacian_eigenfunctions",
     "load_mesh_folder",
     "lower_star_persistence",
+    "make_mesh_distance",
     "make_shapes",
     "pairwise_diagram_distances",
     "to_giotto",

@@ -62,11 +62,12 @@ def all_registries() -> dict[str, Registry]:
     """Every option family, by name: what the documentation's tables are made from."""
     from .diagrams.distances import METRICS
     from .persistence.filtrations import FILTRATIONS
+    from .pipelines import PRESETS
     from .spectral.factorization import SOLVERS
     from .spectral.laplacians import LAPLACIANS
     from .spectral.signatures import SIGNATURES
 
-    return {r.family: r for r in (LAPLACIANS, SOLVERS, SIGNATURES, FILTRATIONS, METRICS)}
+    return {r.family: r for r in (LAPLACIANS, SOLVERS, SIGNATURES, FILTRATIONS, METRICS, PRESETS)}
 
 
 _BLOCK = re.compile(r"(<!-- registry: (\w+) -->\n)(.*?)(<!-- /registry -->)", re.DOTALL)

@@ -166,3 +166,64 @@ def test_many_blocks_float32_and_memmap_output(tmp_path):
     np.testing.assert_array_equal(DiagramDistance(n_jobs=2).fit_transform(diagrams), reference)
     with pytest.raises(ValueError, match=r"out has shape \(60, 59\), expected \(60, 60\)"):
         pairwise_diagram_distances(samples, out=np.zeros((60, 59)))
+
+
+@pytest.mark.parametrize(
+    "metric, order", [("bottleneck", 2.0), ("wasserstein", 1.0), ("wasserstein", 2.0)]
+)
+def test_median_normalization_divides_each_position_by_its_median(metric, order):
+    fitted, other = random_diagrams(9, seed=1, parts=3), random_diagrams(4, seed=2, parts=3)
+    est = DiagramDistance(metric=metric, order=order, normalization="median")
+    matrix = est.fit_transform(fitted)
+    # Independently: each position's own matrix, its median over the fitted pairs.
+    per = [
+        pairwise_diagram_distances([s[k] for s in fitted], metric=metric, order=order)
+        for k in range(3)
+    ]
+    scales = [np.median(m[np.triu_indices(9, 1)][m[np.triu_indices(9, 1)] > 0]) for m in per]
+    np.testing.assert_allclose(est.scales_, scales, rtol=1e-12)
+    scaled = [m / s for m, s in zip(per, scales, strict=True)]
+    if metric == "bottleneck":
+        expected = np.maximum.reduce(scaled)
+    else:
+        expected = sum(m**order for m in scaled) ** (1 / order)
+    np.testing.assert_allclose(matrix, expected, rtol=1e-12)
+    np.testing.assert_allclose(est.transform(fitted), matrix, rtol=1e-12, atol=1e-15)
+    cross = [
+        pairwise_diagram_distances(
+            [s[k] for s in other], [s[k] for s in fitted], metric=metric, order=order
+        )
+        / scales[k]
+        for k in range(3)
+    ]
+    expected = (
+        np.maximum.reduce(cross)
+        if metric == "bottleneck"
+        else sum(m**order for m in cross) ** (1 / order)
+    )
+    np.testing.assert_allclose(est.fit(fitted).transform(other), expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("metric", ["bottleneck", "wasserstein"])
+def test_median_normalization_ignores_the_scale_of_each_position(metric):
+    # Positions measured in different units (a signature at two times): multiplying the
+    # values of one position's diagrams by 1000 changes nothing after normalization, and
+    # everything without it.
+    samples = random_diagrams(8, seed=4, parts=2)
+    stretched = [(a, 1000.0 * b) for a, b in samples]
+    est = DiagramDistance(metric=metric, order=1.0, normalization="median")
+    np.testing.assert_allclose(est.fit_transform(stretched), est.fit_transform(samples), rtol=1e-10)
+    plain = DiagramDistance(metric=metric, order=1.0)
+    assert not np.allclose(plain.fit_transform(stretched), plain.fit_transform(samples))
+
+
+def test_median_normalization_of_a_position_that_separates_nothing():
+    # Identical (or empty) diagrams at a position: scale 1, no NaN, the other counts alone.
+    samples = [(d, np.empty((0, 2))) for d in random_diagrams(5, seed=5)]
+    est = DiagramDistance(metric="wasserstein", order=1.0, normalization="median")
+    matrix = est.fit_transform(samples)
+    assert est.scales_[1] == 1.0 and np.isfinite(matrix).all()
+    expected = DiagramDistance(metric="wasserstein", order=1.0).fit_transform(
+        [s[0] for s in samples]
+    )
+    np.testing.assert_allclose(matrix, expected / est.scales_[0], rtol=1e-12)

@@ -311,3 +311,22 @@ def test_symmetric_diagrams_of_a_function_without_ties():
     both = both[np.isfinite(both[:, 1])]
     np.testing.assert_array_equal(sorted_rows(diagrams[0]), sorted_rows(both))
     np.testing.assert_array_equal(sorted_rows(diagrams[1]), [[-41.0, 0.0], [0.0, 41.0]])
+
+
+@pytest.mark.parametrize(
+    "mesh", [sphere(2), torus(), two_spheres()], ids=["sphere", "torus", "two spheres"]
+)
+def test_each_part_of_extended_persistence_alone_is_the_same_diagram(mesh):
+    # parts= computes only the kept diagrams: each must be exactly that diagram of the
+    # full computation, for every kind (ordinary, superlevel, ranges, essential H1).
+    vertices, faces = mesh
+    values = np.random.default_rng(3).normal(size=len(vertices))
+    full = LowerStarPersistence(filtration="extended").fit_transform([(mesh, values)])[0]
+    names = LowerStarPersistence(filtration="extended").diagram_names()
+    for k, name in enumerate(names):
+        alone = LowerStarPersistence(filtration="extended", parts=(name,))
+        np.testing.assert_array_equal(alone.fit_transform([(mesh, values)])[0], full[k])
+    pair = LowerStarPersistence(filtration="extended", parts=(names[3], names[1]))
+    kept = pair.fit_transform([(mesh, values)])[0]
+    np.testing.assert_array_equal(kept[0], full[1])  # the filtration's order, not parts'
+    np.testing.assert_array_equal(kept[1], full[3])

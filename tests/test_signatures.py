@@ -139,11 +139,18 @@ def test_a_grid_over_signatures_and_scales_solves_each_mesh_once(tmp_path: Path)
         DiagramDistance(),
         KNeighborsClassifier(1, metric="precomputed"),
     )
-    grid = {
-        "laplacianeigentransformer__signature": ["hks", "log-hks", "wks"],
-        "laplacianeigentransformer__n_scales": [2, 3],
-    }
-    GridSearchCV(pipe, grid, cv=3).fit(meshes, y)
+    grid = [
+        {
+            "laplacianeigentransformer__signature": ["hks", "log-hks", "wks"],
+            "laplacianeigentransformer__n_scales": [2, 3],
+        },
+        {  # the eigenfunctions themselves, from the same solve
+            "laplacianeigentransformer__signature": ["eigenfunctions"],
+            "laplacianeigentransformer__eigen_index": [1, 4, (2, 3)],
+        },
+    ]
+    search = GridSearchCV(pipe, grid, cv=3).fit(meshes, y)
+    assert len(search.cv_results_["params"]) == 9
     assert sum(1 for _ in tmp_path.rglob("output.pkl")) == len(meshes)
 
 

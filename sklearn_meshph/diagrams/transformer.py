@@ -46,6 +46,15 @@ class DiagramDistance(SampleTransformer):
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the blocks of pairs on stderr (needs
         tqdm, the ``progress`` extra); nothing is printed at 0.
+    normalization : {"none", "median"}, default="none"
+        How the diagrams of a tuple weigh in the combined distance. ``"none"``: as
+        they are (the typed disjoint union below). ``"median"``: each position's
+        distance is first divided by its median over the fitted pairs (its positive
+        finite off-diagonal distances; 1 if there is none), learned by ``fit``. Use it
+        when the positions are functions on different scales, such as the heat kernel
+        signature at several times: the persistence of ``log HKS`` shrinks with the
+        time, and without it the earliest times decide every distance. ``fit`` then
+        computes the fitted samples' distances (which ``fit_transform`` returns).
 
     Attributes
     ----------
@@ -53,6 +62,8 @@ class DiagramDistance(SampleTransformer):
         The fitted samples, validated.
     n_diagrams_ : int
         Number of diagrams per sample.
+    scales_ : ndarray of shape (n_diagrams,)
+        The divisor of each position (all 1 with ``normalization="none"``).
 
     See Also
     --------
@@ -90,6 +101,7 @@ class DiagramDistance(SampleTransformer):
         "n_jobs": [Integral, None],
         "dtype": [Options(("float64", "float32"))],
         "verbose": [Interval(Integral, 0, None, closed="left")],
+        "normalization": [Options(("none", "median"))],
     }
 
     def __init__(
@@ -100,6 +112,7 @@ class DiagramDistance(SampleTransformer):
         n_jobs=None,
         dtype="float64",
         verbose=0,
+        normalization="none",
     ):
         self.metric = metric
         self.order = order
@@ -107,9 +120,11 @@ class DiagramDistance(SampleTransformer):
         self.n_jobs = n_jobs
         self.dtype = dtype
         self.verbose = verbose
+        self.normalization = normalization
 
     def fit(self, X, y=None):
-        """Store the diagrams to measure distances to.
+        """Store the diagrams to measure distances to (and, with
+        ``normalization="median"``, learn the scale of each position).
 
         Parameters
         ----------
@@ -120,23 +135,65 @@ class DiagramDistance(SampleTransformer):
         -------
         self
         """
+        self._fit(X)
+        return self
+
+    def _fit(self, X):
+        """Fit; the fitted samples' symmetric matrix when it was computed, else None."""
         super().fit(X)
         self.diagrams_ = check_samples(X)
         self.n_diagrams_ = len(self.diagrams_[0])
         # Refuse settings the kernels cannot carry now, not at transform time.
         kernel_metric(self.metric, self.order, self.internal_p)
-        return self
+        self.scales_ = np.ones(self.n_diagrams_)
+        if self.normalization == "none":
+            return None
+        parts = self._per_position(self.diagrams_, None)
+        for k, part in enumerate(parts):
+            off = part[np.triu_indices(len(part), 1)]
+            off = off[np.isfinite(off) & (off > 0)]
+            # A position that separates no fitted pair adds nothing: any divisor will do.
+            self.scales_[k] = float(np.median(off)) if off.size else 1.0
+        return self._combine(parts)
 
-    def _kwargs(self):
+    def _kwargs(self, dtype=None):
         return dict(
             metric=self.metric,
             order=self.order,
             internal_p=self.internal_p,
             n_jobs=self.n_jobs,
-            dtype=np.dtype(self.dtype),
+            dtype=np.dtype(dtype or self.dtype),
             out=None,
             verbose=self.verbose,
         )
+
+    def _per_position(self, left, right):
+        """The float64 distance matrix of each position on its own."""
+        kwargs = self._kwargs(dtype="float64")
+        return [
+            distance_matrix(
+                [s[k : k + 1] for s in left],
+                None if right is None else [s[k : k + 1] for s in right],
+                **kwargs,
+            )
+            for k in range(self.n_diagrams_)
+        ]
+
+    def _combine(self, parts):
+        """Per-position matrices divided by their scales, combined as the metric combines
+        the diagrams of a tuple (maximum, or l_q norm)."""
+        scaled = [part / scale for part, scale in zip(parts, self.scales_, strict=True)]
+        if self.metric == "bottleneck":
+            total = np.maximum.reduce(scaled)
+        else:
+            q = float(self.order)
+            total = sum(part**q for part in scaled) ** (1.0 / q)
+        return total.astype(self.dtype, copy=False)
+
+    def _distances(self, left, right):
+        if self.normalization == "none":
+            return distance_matrix(left, right, **self._kwargs())
+        return self._combine(self._per_position(left, right))
 
     def transform(self, X):
         """Distances from each sample of ``X`` to each fitted sample.
@@ -151,7 +208,7 @@ class DiagramDistance(SampleTransformer):
         """
         check_is_fitted(self)
         samples = check_samples(X, n_diagrams=self.n_diagrams_)
-        return distance_matrix(samples, self.diagrams_, **self._kwargs())
+        return self._distances(samples, self.diagrams_)
 
     def fit_transform(self, X, y=None):
         """Fit and return the symmetric distance matrix, each pair computed once.
@@ -166,5 +223,5 @@ class DiagramDistance(SampleTransformer):
         -------
         ndarray of shape (len(X), len(X))
         """
-        self.fit(X)
-        return distance_matrix(self.diagrams_, None, **self._kwargs())
+        matrix = self._fit(X)
+        return self._distances(self.diagrams_, None) if matrix is None else matrix

@@ -2,8 +2,10 @@
 
 Each entry computes the diagrams of one function from the mesh's edge adjacency (built
 once per mesh) and names them. A new filtration is a function
-``(adjacency, values, essential, surface) -> list of (n, 2) arrays``, the names of its
-diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`.
+``(adjacency, values, essential, surface, wanted) -> list of (n, 2) arrays``, the names
+of its diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`. ``wanted``
+holds the indices of the diagrams the caller keeps: a filtration may skip the work of
+the others and return them empty.
 """
 
 from __future__ import annotations
@@ -27,13 +29,14 @@ ESSENTIAL_POLICIES = ("keep", "drop", "max")
 class Filtration:
     """How one function becomes diagrams: ``compute`` and the name of each diagram.
 
-    ``needs_surface``: ``compute`` uses the closed-surface edge structure (built once per
-    mesh, None on a mesh that is not a closed surface).
+    ``surface_diagrams``: the indices of the diagrams that ``compute`` makes from the
+    closed-surface edge structure (built once per mesh when one of them is wanted, None
+    on a mesh that is not a closed surface).
     """
 
     compute: Callable
     diagram_names: tuple[str, ...]
-    needs_surface: bool = False
+    surface_diagrams: tuple[int, ...] = ()
 
 
 def _reflect(diagram: np.ndarray) -> np.ndarray:
@@ -59,13 +62,13 @@ def _essential(births, values, roots, adjacency, policy):
     return np.column_stack([births, np.full(len(births), np.inf)])
 
 
-def _sublevel(adjacency, values, essential, surface):
+def _sublevel(adjacency, values, essential, surface, wanted):
     pairs, births, roots = sublevel_h0(adjacency, values)
     return [np.vstack([pairs, _essential(births, values, roots, adjacency, essential)])]
 
 
-def _superlevel(adjacency, values, essential, surface):
-    return _sublevel(adjacency, -values, essential, surface)
+def _superlevel(adjacency, values, essential, surface, wanted):
+    return _sublevel(adjacency, -values, essential, surface, wanted)
 
 
 def _both_sweeps(adjacency, values):
@@ -74,15 +77,23 @@ def _both_sweeps(adjacency, values):
     return sub, sup, _component_extremes(values, roots, adjacency)
 
 
-def _symmetric(adjacency, values, essential, surface):
+def _symmetric(adjacency, values, essential, surface, wanted):
     sub, sup, extremes = _both_sweeps(adjacency, values)
     return [np.vstack([sub, sup]), np.vstack([extremes, _reflect(extremes)])]
 
 
-def _extended(adjacency, values, essential, surface):
-    sub, sup, extremes = _both_sweeps(adjacency, values)
-    ext1 = np.empty((0, 2)) if surface is None else essential_h1_pairs(values, surface)
-    return [sub, _reflect(sup), extremes, ext1[ext1[:, 0] < ext1[:, 1]]]
+def _extended(adjacency, values, essential, surface, wanted):
+    sub = sup = extremes = ext1 = np.empty((0, 2))
+    if 0 in wanted or 2 in wanted:
+        sub, _, roots = sublevel_h0(adjacency, values)
+        if 2 in wanted:
+            extremes = _component_extremes(values, roots, adjacency)
+    if 1 in wanted:
+        sup = _reflect(sublevel_h0(adjacency, -values)[0])
+    if 3 in wanted and surface is not None:
+        ext1 = essential_h1_pairs(values, surface)
+        ext1 = ext1[ext1[:, 0] < ext1[:, 1]]
+    return [sub, sup, extremes, ext1]
 
 
 FILTRATIONS = Registry(
@@ -111,7 +122,7 @@ FILTRATIONS = Registry(
             Filtration(
                 _extended,
                 ("ordinary H0", "superlevel H0 (saddle, max)", "(min, max)", "essential H1"),
-                needs_surface=True,
+                surface_diagrams=(3,),
             ),
             "four diagrams of extended persistence: `Ord0` (min, saddle), superlevel "
             "`(saddle, max)` pairs, `Ext0` `(min, max)` and, on a closed surface, the "
@@ -121,12 +132,17 @@ FILTRATIONS = Registry(
 )
 
 
-def function_diagrams(adjacency, values, *, filtration, essential, min_persistence, surface=None):
+def function_diagrams(
+    adjacency, values, *, filtration, essential, min_persistence, surface=None, wanted=None
+):
     """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence).
 
     ``surface`` (from :func:`.extended.closed_surface`, built once per mesh) enables the
-    essential H1 diagram of ``"extended"``; without it that diagram is empty.
+    essential H1 diagram of ``"extended"``; without it that diagram is empty. ``wanted``
+    (indices; ``None``: all) are the diagrams the caller keeps, the others may be empty.
     """
-    diagrams = FILTRATIONS[filtration].value.compute(adjacency, values, essential, surface)
+    entry = FILTRATIONS[filtration].value
+    wanted = range(len(entry.diagram_names)) if wanted is None else wanted
+    diagrams = entry.compute(adjacency, values, essential, surface, wanted)
     # Also drops the (min, max) pair of a component where the function is constant.
     return [d[(d[:, 1] - d[:, 0]) > min_persistence] for d in diagrams]

@@ -37,7 +37,7 @@ def _sample_arrays(sample, index):
 def _diagrams_one(sample, index, *, filtration, essential, min_persistence, keep):
     faces, n_vertices, values = _sample_arrays(sample, index)
     adjacency = mesh_edges(faces, n_vertices)
-    needs_surface = FILTRATIONS[filtration].value.needs_surface
+    needs_surface = set(FILTRATIONS[filtration].value.surface_diagrams) & set(keep)
     surface = closed_surface(faces, adjacency) if needs_surface else None
     diagrams = []
     for column in ScalarField.columns_of(values):
@@ -48,6 +48,7 @@ def _diagrams_one(sample, index, *, filtration, essential, min_persistence, keep
             essential=essential,
             min_persistence=min_persistence,
             surface=surface,
+            wanted=keep,
         )
         diagrams.extend(per_function[k] for k in keep)
     return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
