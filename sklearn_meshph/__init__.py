@@ -41,10 +41,26 @@ from .spectral import (
     graph_laplacian,
     laplacian_eigenfunctions,
 )
+from .vectorization import (
+    BettiCurve,
+    DiagramStatistics,
+    EntropyCurve,
+    PersistenceEntropy,
+    PersistenceImage,
+    PersistenceLandscape,
+    Silhouette,
+)
 
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "BettiCurve",
+    "DiagramStatistics",
+    "EntropyCurve",
+    "PersistenceEntropy",
+    "PersistenceImage",
+    "PersistenceLandscape",
+    "Silhouette",
     "CombinedDistance",
     "CleaningReport",
     "DiagramDistance",

@@ -1,0 +1,16 @@
+"""Diagrams into any scikit-learn model: vectorizations (fixed-length features) and
+kernels (precomputed kernel matrices) of persistence diagrams."""
+
+from .curves import BettiCurve, EntropyCurve, PersistenceLandscape, Silhouette
+from .images import PersistenceImage
+from .summaries import DiagramStatistics, PersistenceEntropy
+
+__all__ = [
+    "BettiCurve",
+    "DiagramStatistics",
+    "EntropyCurve",
+    "PersistenceEntropy",
+    "PersistenceImage",
+    "PersistenceLandscape",
+    "Silhouette",
+]

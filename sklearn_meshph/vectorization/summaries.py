@@ -1,0 +1,203 @@
+"""A few numbers per diagram: persistence entropy and summary statistics."""
+
+from __future__ import annotations
+
+from numbers import Integral
+
+import numpy as np
+
+from .._param_validation import Options
+from ._base import ESSENTIAL_POLICIES, DiagramTransformer
+
+__all__ = ["DiagramStatistics", "PersistenceEntropy"]
+
+_COMMON: dict = {
+    "essential": [Options(ESSENTIAL_POLICIES)],
+    "n_jobs": [Integral, None],
+    "dtype": [Options(("float64", "float32"))],
+}
+
+
+class _Summary(DiagramTransformer):
+    """Per-diagram numbers that need nothing learned but the essential policy."""
+
+    def fit(self, X, y=None):
+        """Validate the samples (and learn the clipping values of ``essential="clip"``).
+
+        Parameters
+        ----------
+        X : sequence of diagrams or of tuples of diagrams
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        self._fit_samples(X)
+        return self
+
+    def transform(self, X):
+        """The numbers of each diagram of each sample.
+
+        Parameters
+        ----------
+        X : sequence of diagrams or of tuples of diagrams
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_diagrams * n_numbers)
+        """
+        return self._parallel_rows(self._checked_parts(X), self._transform_part)
+
+    def _transform_part(self, k, diagrams):
+        return np.array([self._numbers(d) for d in diagrams]).reshape(len(diagrams), -1)
+
+    def get_feature_names_out(self, input_features=None):
+        """``d<k>_<number>``, per diagram position ``k``.
+
+        Returns
+        -------
+        ndarray of str
+        """
+        return np.array(
+            [f"d{k}_{name}" for k in range(self.n_diagrams_) for name in self._names()],
+            dtype=object,
+        )
+
+
+class PersistenceEntropy(_Summary):
+    """Persistence entropy: ``-sum_j p_j log p_j`` with ``p_j`` each point's share of the
+    diagram's total persistence (Chintakunta et al. 2015; Atienza et al. 2020).
+
+    One number per diagram: high when persistence is spread over many points, low when
+    a few points hold it. A diagram without points (or of zero total persistence) gives
+    0.
+
+    Parameters
+    ----------
+    normalized : bool, default=False
+        Divide by ``log n`` (``n`` points; 0 for ``n <= 1``), so that the value lies in
+        [0, 1] whatever the number of points.
+    essential : {"drop", "clip", "error"}, default="drop"
+        Points with infinite death: dropped, clipped at the largest finite death of
+        their position among the fitted diagrams, or refused.
+    n_jobs : int, default=None
+        Blocks of samples computed in parallel (joblib).
+    dtype : {"float64", "float32"}, default="float64"
+
+    Attributes
+    ----------
+    n_diagrams_ : int
+    clip_values_ : ndarray of shape (n_diagrams,)
+
+    See Also
+    --------
+    EntropyCurve : The entropy summary function.
+
+    Notes
+    -----
+    Equals ``gudhi.representations.Entropy(mode="scalar")`` on non-empty diagrams
+    (tested); gudhi returns NaN for an empty one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import PersistenceEntropy
+    >>> PersistenceEntropy().fit_transform([np.array([[0.0, 1.0], [0.0, 1.0]])]).round(4)
+    array([[0.6931]])
+    """
+
+    _parameter_constraints: dict = {**_COMMON, "normalized": ["boolean"]}
+
+    def __init__(self, normalized=False, essential="drop", n_jobs=None, dtype="float64"):
+        self.normalized = normalized
+        self.essential = essential
+        self.n_jobs = n_jobs
+        self.dtype = dtype
+
+    def _names(self):
+        return ["entropy"]
+
+    def _numbers(self, diagram):
+        persistence = diagram[:, 1] - diagram[:, 0]
+        persistence = persistence[persistence > 0]
+        total = persistence.sum()
+        if total <= 0:
+            return [0.0]
+        shares = persistence / total
+        entropy = float(-np.dot(shares, np.log(shares)))
+        if self.normalized:
+            entropy = entropy / np.log(len(shares)) if len(shares) > 1 else 0.0
+        return [entropy]
+
+
+class DiagramStatistics(_Summary):
+    """Summary statistics of each diagram's points.
+
+    Per diagram: the number of points, the total, largest and mean persistence, the
+    ``quantiles`` of the persistence, and the mean birth and death; an empty diagram
+    gives zeros. Cheap, interpretable, and often a strong baseline with a tree model.
+
+    Parameters
+    ----------
+    quantiles : tuple of float, default=(0.1, 0.25, 0.5, 0.75, 0.9)
+        Quantiles of the persistence (linear interpolation).
+    essential : {"drop", "clip", "error"}, default="drop"
+        Points with infinite death: dropped, clipped at the largest finite death of
+        their position among the fitted diagrams, or refused.
+    n_jobs : int, default=None
+        Blocks of samples computed in parallel (joblib).
+    dtype : {"float64", "float32"}, default="float64"
+
+    Attributes
+    ----------
+    n_diagrams_ : int
+    clip_values_ : ndarray of shape (n_diagrams,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import DiagramStatistics
+    >>> stats = DiagramStatistics(quantiles=(0.5,)).fit([np.array([[0.0, 1.0], [0.0, 3.0]])])
+    >>> list(stats.get_feature_names_out())
+    ['d0_count', 'd0_total', 'd0_max', 'd0_mean', 'd0_q0.5', 'd0_mean_birth', 'd0_mean_death']
+    >>> stats.transform([np.array([[0.0, 1.0], [0.0, 3.0]])])
+    array([[2., 4., 3., 2., 2., 0., 2.]])
+    """
+
+    _parameter_constraints: dict = {**_COMMON, "quantiles": [tuple, list]}
+
+    def __init__(
+        self, quantiles=(0.1, 0.25, 0.5, 0.75, 0.9), essential="drop", n_jobs=None, dtype="float64"
+    ):
+        self.quantiles = quantiles
+        self.essential = essential
+        self.n_jobs = n_jobs
+        self.dtype = dtype
+
+    def _check_params(self) -> None:
+        super()._check_params()
+        q = np.asarray(self.quantiles, dtype=float)
+        if q.ndim != 1 or ((q < 0) | (q > 1) | np.isnan(q)).any():
+            raise ValueError(f"quantiles must be numbers in [0, 1], got {self.quantiles!r}")
+
+    def _names(self):
+        return (
+            ["count", "total", "max", "mean"]
+            + [f"q{q:g}" for q in self.quantiles]
+            + ["mean_birth", "mean_death"]
+        )
+
+    def _numbers(self, diagram):
+        if not len(diagram):
+            return [0.0] * (6 + len(self.quantiles))
+        persistence = diagram[:, 1] - diagram[:, 0]
+        return [
+            float(len(diagram)),
+            persistence.sum(),
+            persistence.max(),
+            persistence.mean(),
+            *np.quantile(persistence, np.asarray(self.quantiles, dtype=float)),
+            diagram[:, 0].mean(),
+            diagram[:, 1].mean(),
+        ]

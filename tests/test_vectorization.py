@@ -1,0 +1,239 @@
+"""Vectorizations of diagrams: equal to gudhi.representations, stable, and well-behaved
+scikit-learn transformers (feature names, pandas output, float32, parallel blocks)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from sklearn.linear_model import LogisticRegression
+from sklearn.model_selection import StratifiedKFold, cross_val_score
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+
+from sklearn_meshph import (
+    BettiCurve,
+    DiagramStatistics,
+    EntropyCurve,
+    LaplacianEigenTransformer,
+    LowerStarPersistence,
+    PersistenceEntropy,
+    PersistenceImage,
+    PersistenceLandscape,
+    Silhouette,
+    make_shapes,
+)
+
+gudhi_rep = pytest.importorskip("gudhi.representations")
+
+VECTORIZERS = [
+    PersistenceImage(resolution=(6, 5)),
+    PersistenceLandscape(resolution=12),
+    Silhouette(resolution=12),
+    BettiCurve(resolution=12),
+    EntropyCurve(resolution=12),
+    PersistenceEntropy(),
+    DiagramStatistics(),
+]
+
+
+def random_diagrams(n, seed=0, max_points=15, empty=True):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        k = int(rng.integers(0 if empty else 1, max_points))
+        births = rng.normal(size=k)
+        out.append(np.column_stack([births, births + rng.exponential(size=k)]))
+    return out
+
+
+def close(ours, theirs):
+    theirs = np.asarray(theirs, dtype=float)
+    scale = max(1.0, float(np.abs(theirs).max()))
+    np.testing.assert_allclose(ours, theirs, rtol=1e-10, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("bandwidth", [0.3, 1.0])
+@pytest.mark.parametrize("weight", ["constant", "persistence"])
+def test_persistence_image_equals_gudhi(bandwidth, weight):
+    diagrams = random_diagrams(30, seed=1)
+    gudhi_weight = (lambda p: 1.0) if weight == "constant" else (lambda p: p[1])
+    ours = PersistenceImage(bandwidth=bandwidth, resolution=(7, 4), weight=weight)
+    theirs = gudhi_rep.PersistenceImage(bandwidth=bandwidth, weight=gudhi_weight, resolution=[7, 4])
+    close(ours.fit_transform(diagrams), theirs.fit_transform(diagrams))
+    np.testing.assert_allclose(ours.im_ranges_[0], theirs.im_range_fixed_, rtol=1e-15)
+    # A given range, and transform on other diagrams.
+    fixed = (-1.0, 2.0, 0.0, 1.5)
+    ours = PersistenceImage(bandwidth=bandwidth, resolution=(5, 5), im_range=fixed, weight=weight)
+    theirs = gudhi_rep.PersistenceImage(
+        bandwidth=bandwidth, weight=gudhi_weight, resolution=[5, 5], im_range=list(fixed)
+    )
+    other = random_diagrams(10, seed=2)
+    close(ours.fit(diagrams).transform(other), theirs.fit(diagrams).transform(other))
+
+
+@pytest.mark.parametrize("keep_endpoints", [False, True])
+@pytest.mark.parametrize("n_landscapes", [1, 3, 20])
+def test_landscapes_equal_gudhi(n_landscapes, keep_endpoints):
+    diagrams = random_diagrams(25, seed=3)
+    ours = PersistenceLandscape(n_landscapes, resolution=17, keep_endpoints=keep_endpoints)
+    theirs = gudhi_rep.Landscape(n_landscapes, resolution=17, keep_endpoints=keep_endpoints)
+    close(ours.fit_transform(diagrams), theirs.fit_transform(diagrams))
+    np.testing.assert_allclose(ours.grids_[0], theirs.grid_, rtol=1e-15)
+    ours = PersistenceLandscape(n_landscapes, resolution=9, sample_range=(-1.0, np.nan))
+    theirs = gudhi_rep.Landscape(n_landscapes, resolution=9, sample_range=[-1.0, np.nan])
+    close(ours.fit_transform(diagrams), theirs.fit_transform(diagrams))
+
+
+@pytest.mark.parametrize("power", [0.0, 1.0, 2.5])
+def test_silhouettes_equal_gudhi(power):
+    diagrams = random_diagrams(25, seed=4, empty=False)  # gudhi: NaN on empty diagrams
+    ours = Silhouette(power=power, resolution=21)
+    theirs = gudhi_rep.Silhouette(weight=lambda p: (p[1] - p[0]) ** power, resolution=21)
+    close(ours.fit_transform(diagrams), theirs.fit_transform(diagrams))
+    assert not Silhouette().fit(diagrams).transform([np.empty((0, 2))]).any()
+
+
+@pytest.mark.parametrize("keep_endpoints", [False, True])
+def test_betti_curves_equal_gudhi(keep_endpoints):
+    diagrams = random_diagrams(25, seed=5)
+    ours = BettiCurve(resolution=33, keep_endpoints=keep_endpoints)
+    theirs = gudhi_rep.BettiCurve(resolution=33, keep_endpoints=keep_endpoints)
+    np.testing.assert_array_equal(ours.fit_transform(diagrams), theirs.fit_transform(diagrams))
+    # Grid points that are births and deaths themselves (half-open intervals).
+    grid_points = [np.array([[0.0, 1.0], [1.0, 2.0], [0.0, 2.0]])]
+    ours = BettiCurve(resolution=5, sample_range=(0.0, 2.0))
+    theirs = gudhi_rep.BettiCurve(resolution=5, sample_range=[0.0, 2.0])
+    np.testing.assert_array_equal(
+        ours.fit_transform(grid_points), theirs.fit_transform(grid_points)
+    )
+
+
+def test_entropy_equals_gudhi_and_its_curve_follows_the_definition():
+    diagrams = random_diagrams(25, seed=6, empty=False)
+    close(
+        PersistenceEntropy().fit_transform(diagrams),
+        gudhi_rep.Entropy(mode="scalar").fit_transform(diagrams),
+    )
+    curve = EntropyCurve(resolution=15, normalized=False).fit(diagrams)
+    values = curve.transform(diagrams)
+    for diagram, row in zip(diagrams, values, strict=True):
+        shares = (diagram[:, 1] - diagram[:, 0]) / (diagram[:, 1] - diagram[:, 0]).sum()
+        alive = (diagram[:, :1] <= curve.grids_[0]) & (curve.grids_[0] < diagram[:, 1:])
+        np.testing.assert_allclose(row, (-shares * np.log(shares)) @ alive, atol=1e-12)
+    normalized = EntropyCurve(resolution=15).fit_transform(diagrams)
+    positive = values.sum(axis=1) > 0  # a single point has entropy 0 everywhere
+    assert positive.sum() >= 20
+    np.testing.assert_allclose(normalized[positive].sum(axis=1), 1.0)
+    assert not normalized[~positive].any()
+    # normalized entropy lies in [0, 1]; n equal points give exactly 1
+    assert PersistenceEntropy(normalized=True).fit_transform(
+        [np.array([[0.0, 1.0]] * 4)]
+    ) == pytest.approx(1.0)
+
+
+def test_statistics_by_hand():
+    diagram = np.array([[0.0, 1.0], [1.0, 4.0], [2.0, 2.5]])
+    stats = DiagramStatistics(quantiles=(0.0, 0.5, 1.0)).fit([diagram])
+    row = stats.transform([diagram, np.empty((0, 2))])
+    np.testing.assert_allclose(row[0], [3, 4.5, 3, 1.5, 0.5, 1, 3, 1, 2.5])
+    assert not row[1].any()
+    assert len(stats.get_feature_names_out()) == row.shape[1]
+
+
+@pytest.mark.parametrize("vectorizer", VECTORIZERS, ids=lambda v: type(v).__name__)
+def test_tuples_are_the_positions_side_by_side_each_with_its_own_grid(vectorizer):
+    first, second = random_diagrams(12, seed=7), random_diagrams(12, seed=8)
+    second = [100.0 * d for d in second]  # another scale: its own learned range
+    pairs = list(zip(first, second, strict=True))
+    together = vectorizer.fit(pairs).transform(pairs)
+    alone = np.hstack(
+        [vectorizer.fit(first).transform(first), vectorizer.fit(second).transform(second)]
+    )
+    np.testing.assert_allclose(together, alone, rtol=1e-12)
+
+
+@pytest.mark.parametrize("vectorizer", VECTORIZERS, ids=lambda v: type(v).__name__)
+def test_sklearn_contract(vectorizer, estimator_round_trip):
+    pairs = list(zip(random_diagrams(40, seed=9), random_diagrams(40, seed=10), strict=True))
+    features = vectorizer.fit(pairs).transform(pairs)
+    names = vectorizer.get_feature_names_out()
+    assert features.shape == (40, len(names)) and len(set(names)) == len(names)
+    assert np.isfinite(features).all()
+    # pandas output names its columns
+    pandas = pytest.importorskip("pandas")
+    frame = vectorizer.set_output(transform="pandas").transform(pairs)
+    assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == list(names)
+    vectorizer.set_output(transform="default")
+    # float32 on request, identical blocks for any n_jobs
+    single = vectorizer.set_params(dtype="float32", n_jobs=1).fit(pairs).transform(pairs)
+    assert single.dtype == np.float32
+    np.testing.assert_array_equal(single, features.astype(np.float32))
+    vectorizer.set_params(dtype="float64", n_jobs=2)
+    np.testing.assert_array_equal(vectorizer.fit(pairs).transform(pairs), features)
+    vectorizer.set_params(n_jobs=None)
+    estimator_round_trip(vectorizer, pairs, {"essential": "clip"})
+
+
+def test_essential_policies():
+    diagrams = [np.array([[0.0, 1.0], [0.5, np.inf]]), np.array([[0.0, 3.0]])]
+    stats = DiagramStatistics(quantiles=())
+    dropped = stats.fit_transform(diagrams)
+    assert dropped[0, 0] == 1  # one finite point counted
+    clipped = stats.set_params(essential="clip").fit_transform(diagrams)
+    assert clipped[0, 0] == 2 and clipped[0, 2] == pytest.approx(2.5)  # clipped at 3.0
+    with pytest.raises(ValueError, match=r"sample 0, diagram 0: row 1 is an essential"):
+        stats.set_params(essential="error").fit(diagrams)
+
+
+def test_malformed_diagrams_name_the_sample():
+    with pytest.raises(ValueError, match="sample 1"):
+        PersistenceImage().fit([np.zeros((1, 2)), np.array([[1.0, 0.0]])])
+    with pytest.raises(ValueError, match="diagrams per sample"):
+        PersistenceLandscape().fit([np.zeros((1, 2))]).transform([(np.zeros((1, 2)),) * 2])
+    with pytest.raises(ValueError, match="resolution"):
+        PersistenceImage(resolution=(0, 3)).fit([np.zeros((1, 2))])
+
+
+def diagram_strategy():
+    point = st.tuples(st.floats(-5, 5, allow_nan=False), st.floats(0, 5, allow_nan=False)).map(
+        lambda bp: (bp[0], bp[0] + bp[1])
+    )
+    return st.lists(point, min_size=1, max_size=8).map(lambda p: np.array(p, dtype=float))
+
+
+@settings(max_examples=60, deadline=None)
+@given(diagram_strategy(), st.floats(0, 0.05), st.integers(0, 2**32 - 1))
+def test_landscapes_silhouettes_and_images_are_stable(diagram, eps, seed):
+    # Moving every point by at most eps (L-infinity; persistence kept >= 0) moves the
+    # diagram by at most eps in bottleneck distance; landscapes and silhouettes then
+    # move by at most sqrt(2) eps (sup norm), a constant-weight image by at most
+    # n sqrt(5) eps max|grad g| (g the Gaussian).
+    rng = np.random.default_rng(seed)
+    moved = diagram + rng.uniform(-eps, eps, size=diagram.shape)
+    moved[:, 1] = np.maximum(moved[:, 1], moved[:, 0])
+    both = [diagram, moved]
+    fixed = (-6.0, 11.0)
+    for vectorizer in (
+        PersistenceLandscape(3, resolution=50, sample_range=fixed),
+        Silhouette(power=0.0, resolution=50, sample_range=fixed),
+    ):
+        a, b = vectorizer.fit(both).transform(both)
+        assert np.abs(a - b).max() <= np.sqrt(2) * eps + 1e-12
+    sigma = 0.5
+    image = PersistenceImage(bandwidth=sigma, resolution=(10, 10), im_range=(-6, 6, 0, 6))
+    a, b = image.fit(both).transform(both)
+    gradient = np.exp(-0.5) / (2 * np.pi * sigma**3)
+    assert np.abs(a - b).max() <= len(diagram) * np.sqrt(5) * eps * gradient + 1e-12
+
+
+def test_a_linear_model_on_images_of_mesh_diagrams():
+    meshes, y = make_shapes(n_per_class=5, random_state=1, return_X_y=True)
+    model = make_pipeline(
+        LaplacianEigenTransformer(signature="log-hks", n_eigenpairs=30, n_scales=3),
+        LowerStarPersistence(filtration="extended", parts=("superlevel H0 (saddle, max)",)),
+        PersistenceImage(bandwidth=0.2, resolution=(8, 8), weight="persistence"),
+        StandardScaler(),
+        LogisticRegression(max_iter=2000),
+    )
+    scores = cross_val_score(model, meshes, y, cv=StratifiedKFold(5))
+    assert scores.mean() >= 0.8  # chance is 1/6
