@@ -71,6 +71,28 @@ def test_persistence_image_equals_gudhi(bandwidth, weight):
     close(ours.fit(diagrams).transform(other), theirs.fit(diagrams).transform(other))
 
 
+@pytest.mark.parametrize("bandwidth", [0.2, 1.0])
+def test_pixel_images_equal_persims_imager(bandwidth):
+    persim = pytest.importorskip("persim")
+    diagrams = random_diagrams(20, seed=11)
+    imager = persim.PersistenceImager(
+        birth_range=(-2.0, 2.0),
+        pers_range=(0.0, 3.0),
+        pixel_size=0.25,
+        kernel_params={"sigma": bandwidth**2},
+    )
+    theirs = np.array(imager.transform(diagrams, skew=True))  # (n, birth, persistence)
+    ours = PersistenceImage(
+        bandwidth=bandwidth,
+        resolution=(16, 12),
+        im_range=(-2.0, 2.0, 0.0, 3.0),
+        sampling="pixel",
+        weight="persistence",
+    ).fit_transform(diagrams)
+    assert theirs.max() > 0.05
+    close(ours.reshape(-1, 12, 16), theirs.transpose(0, 2, 1))
+
+
 @pytest.mark.parametrize("keep_endpoints", [False, True])
 @pytest.mark.parametrize("n_landscapes", [1, 3, 20])
 def test_landscapes_equal_gudhi(n_landscapes, keep_endpoints):

@@ -3,6 +3,8 @@ points and the offsets of each diagram's rows."""
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -19,26 +21,45 @@ def pack_points(diagrams) -> tuple[np.ndarray, np.ndarray]:
 
 
 @numba.njit(cache=True)
-def images(points, weights, offsets, xs, ys, bandwidth):  # pragma: no cover - compiled
-    """Gaussian persistence images at the grid ``ys x xs`` (rows: persistence, columns:
-    birth), one row per diagram, points in (birth, persistence) coordinates. The
-    Gaussian is separable, so each point costs ``len(xs) + len(ys)`` exponentials."""
-    n, rx, ry = len(offsets) - 1, len(xs), len(ys)
+def _gaussian_factors(center, nodes, bandwidth, pixel, out):  # pragma: no cover - compiled
+    """One axis of a separable Gaussian: its values at ``nodes`` or, for pixels, its
+    mass between consecutive ``nodes`` (the pixel edges)."""
+    if pixel:
+        scale = bandwidth * math.sqrt(2.0)
+        previous = 0.5 * math.erfc(-(nodes[0] - center) / scale)
+        for j in range(len(out)):
+            current = 0.5 * math.erfc(-(nodes[j + 1] - center) / scale)
+            out[j] = current - previous
+            previous = current
+    else:
+        two_var = 2.0 * bandwidth * bandwidth
+        for j in range(len(out)):
+            out[j] = math.exp(-((center - nodes[j]) ** 2) / two_var)
+
+
+@numba.njit(cache=True)
+def images(points, weights, offsets, xs, ys, bandwidth, pixel):  # pragma: no cover - compiled
+    """Gaussian persistence images, one row per diagram (rows of the image: persistence,
+    columns: birth), points in (birth, persistence) coordinates. ``pixel=False``: the
+    density at the grid ``ys x xs``; ``pixel=True``: its mass in each pixel, ``xs`` and
+    ``ys`` being the pixel edges. The Gaussian is separable, so each point costs one
+    pass over each axis and one outer product."""
+    rx = len(xs) - 1 if pixel else len(xs)
+    ry = len(ys) - 1 if pixel else len(ys)
+    n = len(offsets) - 1
     out = np.zeros((n, ry * rx))
-    scale = 1.0 / (2.0 * np.pi * bandwidth * bandwidth)
-    two_var = 2.0 * bandwidth * bandwidth
+    scale = 1.0 if pixel else 1.0 / (2.0 * np.pi * bandwidth * bandwidth)
     ex = np.empty(rx)
     ey = np.empty(ry)
     for d in range(n):
         for p in range(offsets[d], offsets[d + 1]):
-            b, q = points[p, 0], points[p, 1]
-            for j in range(rx):
-                ex[j] = np.exp(-((b - xs[j]) ** 2) / two_var)
+            _gaussian_factors(points[p, 0], xs, bandwidth, pixel, ex)
+            _gaussian_factors(points[p, 1], ys, bandwidth, pixel, ey)
+            w = weights[p] * scale
             for i in range(ry):
-                ey[i] = weights[p] * scale * np.exp(-((q - ys[i]) ** 2) / two_var)
-            for i in range(ry):
+                wy = w * ey[i]
                 for j in range(rx):
-                    out[d, i * rx + j] += ey[i] * ex[j]
+                    out[d, i * rx + j] += wy * ex[j]
     return out
 
 

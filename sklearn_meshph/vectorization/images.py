@@ -48,6 +48,11 @@ class PersistenceImage(DiagramTransformer):
         ``(birth_min, birth_max, persistence_min, persistence_max)`` of the grid;
         ``None`` or NaN entries are learned by ``fit``, per diagram position, as the
         extremes of the fitted points.
+    sampling : {"point", "pixel"}, default="point"
+        ``"point"``: the density at the grid points (gudhi's convention);
+        ``"pixel"``: the mass of the Gaussians inside each pixel, the range split into
+        ``resolution`` pixels per axis (persim's convention; an image then sums to the
+        total weight that falls inside the range).
     weight : {"constant", "persistence"} or callable, default="constant"
         Weight of each point: 1, its persistence ``d - b``, or a function of an
         ``(n, 2)`` array of (birth, persistence) rows returning ``n`` weights. Weighting
@@ -79,7 +84,11 @@ class PersistenceImage(DiagramTransformer):
     With one diagram per sample, ``weight="constant"`` and the same ``im_range``, the
     output equals ``gudhi.representations.PersistenceImage(bandwidth, weight=lambda x:
     1, resolution=list(resolution), im_range=...)`` (tested to 1e-10); gudhi learns one
-    range over all diagrams it is fitted on, as we do per position.
+    range over all diagrams it is fitted on, as we do per position. With
+    ``sampling="pixel"`` and ``weight="persistence"`` it equals persim's
+    ``PersistenceImager(birth_range, pers_range, pixel_size,
+    kernel_params={"sigma": bandwidth ** 2})`` (its default weight, persistence to the
+    power 1) transposed, when ``pixel_size`` divides both ranges (tested).
 
     Examples
     --------
@@ -94,6 +103,7 @@ class PersistenceImage(DiagramTransformer):
         "bandwidth": [Interval(Real, 0, None, closed="neither")],
         "resolution": [tuple, list],
         "im_range": [tuple, list, None],
+        "sampling": [Options(("point", "pixel"))],
         "weight": [Options(("constant", "persistence")), callable],
         "essential": [Options(ESSENTIAL_POLICIES)],
         "n_jobs": [Integral, None],
@@ -105,6 +115,7 @@ class PersistenceImage(DiagramTransformer):
         bandwidth=1.0,
         resolution=(20, 20),
         im_range=None,
+        sampling="point",
         weight="constant",
         essential="drop",
         n_jobs=None,
@@ -113,6 +124,7 @@ class PersistenceImage(DiagramTransformer):
         self.bandwidth = bandwidth
         self.resolution = resolution
         self.im_range = im_range
+        self.sampling = sampling
         self.weight = weight
         self.essential = essential
         self.n_jobs = n_jobs
@@ -158,9 +170,10 @@ class PersistenceImage(DiagramTransformer):
         bp = np.column_stack([points[:, 0], points[:, 1] - points[:, 0]])
         weights = point_weights(bp, self.weight)
         lo_x, hi_x, lo_y, hi_y = self.im_ranges_[k]
-        xs = np.linspace(lo_x, hi_x, self.resolution[0])
-        ys = np.linspace(lo_y, hi_y, self.resolution[1])
-        return images(bp, weights, offsets, xs, ys, float(self.bandwidth))
+        pixel = self.sampling == "pixel"
+        xs = np.linspace(lo_x, hi_x, self.resolution[0] + pixel)
+        ys = np.linspace(lo_y, hi_y, self.resolution[1] + pixel)
+        return images(bp, weights, offsets, xs, ys, float(self.bandwidth), pixel)
 
     def transform(self, X):
         """The flattened image of each diagram of each sample.
