@@ -11,14 +11,15 @@ from joblib import Parallel
 __all__ = ["parallel", "track"]
 
 
-def parallel(n_jobs) -> Parallel:
+def parallel(n_jobs, prefer=None) -> Parallel:
     """A joblib ``Parallel`` returning results in order as they finish, where the backend
     can (loky, threading, dask with joblib >= 1.4); others (multiprocessing) return
-    them all at once."""
+    them all at once. ``prefer="threads"`` is joblib's soft hint for work that releases
+    the GIL (a ``parallel_backend`` context still decides)."""
     try:
-        return Parallel(n_jobs=n_jobs, return_as="generator")
+        return Parallel(n_jobs=n_jobs, return_as="generator", prefer=prefer)
     except ValueError:  # "Backend ... does not support return_as=generator"
-        return Parallel(n_jobs=n_jobs)
+        return Parallel(n_jobs=n_jobs, prefer=prefer)
 
 
 def track(items: Iterable, *, total: int, desc: str, verbose: int) -> Iterator:

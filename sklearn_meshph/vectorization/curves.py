@@ -8,8 +8,8 @@ from numbers import Integral, Real
 import numpy as np
 
 from .._param_validation import Interval, Options
-from ._base import ESSENTIAL_POLICIES, DiagramTransformer
-from ._compiled import betti_curves, entropy_curves, landscapes, pack_points, silhouettes
+from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from ._compiled import betti_curves, entropy_curves, landscapes, silhouettes
 
 __all__ = ["BettiCurve", "EntropyCurve", "PersistenceLandscape", "Silhouette", "sample_grid"]
 
@@ -67,7 +67,7 @@ _GRID_ATTRIBUTES = """grids_ : list of ndarray
         The largest finite death of each position (used by ``essential="clip"``)."""
 
 
-class _GridFunction(DiagramTransformer):
+class _GridFunction(PackedVectorizer):
     """A function of the filtration value sampled on a grid learned per position."""
 
     _parameter_constraints: dict = dict(_GRID_CONSTRAINTS)
@@ -76,43 +76,19 @@ class _GridFunction(DiagramTransformer):
     def _features_per_position(self) -> int:
         return self.resolution
 
-    def fit(self, X, y=None):
-        """Learn the grid of each diagram position.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        parts = self._fit_samples(X)
+    def _fit_positions(self, packed):
         self.grids_ = [
             sample_grid(
-                [s[k] for s in parts], self.resolution, self.sample_range, self.keep_endpoints
+                [packed.rows_of_position(k)],
+                self.resolution,
+                self.sample_range,
+                self.keep_endpoints,
             )
-            for k in range(self.n_diagrams_)
+            for k in range(packed.n_diagrams)
         ]
-        return self
 
-    def transform(self, X):
-        """The sampled function(s) of each diagram of each sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (n_samples, n_features)
-        """
-        return self._parallel_rows(self._checked_parts(X), self._transform_part)
-
-    def _transform_part(self, k, diagrams):
-        points, offsets = pack_points(diagrams)
-        return self._compute(points, offsets, self.grids_[k])
+    def _compute(self, k, points, starts, stops):
+        return self._curves(points, starts, stops, self.grids_[k])
 
     def _column_names(self) -> list[str]:
         return [f"{self._feature}_{g}" for g in range(self.resolution)]
@@ -186,8 +162,8 @@ class PersistenceLandscape(_GridFunction):
         self.n_jobs = n_jobs
         self.dtype = dtype
 
-    def _compute(self, points, offsets, grid):
-        return landscapes(points, offsets, grid, self.n_landscapes)
+    def _curves(self, points, starts, stops, grid):
+        return landscapes(points, starts, stops, grid, self.n_landscapes)
 
     def _column_names(self):
         return [
@@ -253,9 +229,9 @@ class Silhouette(_GridFunction):
         self.n_jobs = n_jobs
         self.dtype = dtype
 
-    def _compute(self, points, offsets, grid):
+    def _curves(self, points, starts, stops, grid):
         weights = (points[:, 1] - points[:, 0]) ** float(self.power)
-        return silhouettes(points, weights, offsets, grid)
+        return silhouettes(points, weights, starts, stops, grid)
 
 
 class BettiCurve(_GridFunction):
@@ -304,8 +280,8 @@ class BettiCurve(_GridFunction):
         self.n_jobs = n_jobs
         self.dtype = dtype
 
-    def _compute(self, points, offsets, grid):
-        return betti_curves(points, offsets, grid)
+    def _curves(self, points, starts, stops, grid):
+        return betti_curves(points, starts, stops, grid)
 
 
 class EntropyCurve(_GridFunction):
@@ -360,8 +336,8 @@ class EntropyCurve(_GridFunction):
         self.n_jobs = n_jobs
         self.dtype = dtype
 
-    def _compute(self, points, offsets, grid):
-        curves = entropy_curves(points, offsets, grid)
+    def _curves(self, points, starts, stops, grid):
+        curves = entropy_curves(points, starts, stops, grid)
         if self.normalized:
             sums = curves.sum(axis=1, keepdims=True)
             curves = np.divide(curves, sums, out=np.zeros_like(curves), where=sums > 0)

@@ -7,8 +7,8 @@ from numbers import Integral, Real
 import numpy as np
 
 from .._param_validation import Interval, Options
-from ._base import ESSENTIAL_POLICIES, DiagramTransformer
-from ._compiled import images, pack_points
+from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from ._compiled import images
 
 __all__ = ["PersistenceImage"]
 
@@ -28,7 +28,7 @@ def point_weights(points_bp: np.ndarray, weight, sample: str = "") -> np.ndarray
     return values
 
 
-class PersistenceImage(DiagramTransformer):
+class PersistenceImage(PackedVectorizer):
     """Persistence images: each diagram as a weighted sum of Gaussians on a grid.
 
     Each point ``(b, d)`` becomes ``(b, d - b)`` (birth, persistence), weighted, and
@@ -139,23 +139,11 @@ class PersistenceImage(DiagramTransformer):
         if self.im_range is not None and len(self.im_range) != 4:
             raise ValueError(f"im_range must have 4 entries, got {self.im_range!r}")
 
-    def fit(self, X, y=None):
-        """Learn the grid's range of each diagram position.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        parts = self._fit_samples(X)
+    def _fit_positions(self, packed):
         given = np.full(4, np.nan) if self.im_range is None else np.array(self.im_range, float)
         ranges = []
-        for k in range(self.n_diagrams_):
-            points = np.concatenate([s[k] for s in parts] + [np.empty((0, 2))])
+        for k in range(packed.n_diagrams):
+            points = packed.rows_of_position(k)
             if len(points):
                 births, persistence = points[:, 0], points[:, 1] - points[:, 0]
                 learned = [births.min(), births.max(), persistence.min(), persistence.max()]
@@ -163,30 +151,15 @@ class PersistenceImage(DiagramTransformer):
                 learned = [0.0, 1.0, 0.0, 1.0]
             ranges.append(np.where(np.isnan(given), learned, given))
         self.im_ranges_ = np.array(ranges)
-        return self
 
-    def _transform_part(self, k, diagrams):
-        points, offsets = pack_points(diagrams)
+    def _compute(self, k, points, starts, stops):
         bp = np.column_stack([points[:, 0], points[:, 1] - points[:, 0]])
         weights = point_weights(bp, self.weight)
         lo_x, hi_x, lo_y, hi_y = self.im_ranges_[k]
         pixel = self.sampling == "pixel"
         xs = np.linspace(lo_x, hi_x, self.resolution[0] + pixel)
         ys = np.linspace(lo_y, hi_y, self.resolution[1] + pixel)
-        return images(bp, weights, offsets, xs, ys, float(self.bandwidth), pixel)
-
-    def transform(self, X):
-        """The flattened image of each diagram of each sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (n_samples, n_diagrams * resolution[0] * resolution[1])
-        """
-        return self._parallel_rows(self._checked_parts(X), self._transform_part)
+        return images(bp, weights, starts, stops, xs, ys, float(self.bandwidth), pixel)
 
     def get_feature_names_out(self, input_features=None):
         """``d<k>_pixel_<row>_<column>``: diagram ``k``, persistence row, birth column.

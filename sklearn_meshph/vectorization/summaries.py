@@ -7,7 +7,8 @@ from numbers import Integral
 import numpy as np
 
 from .._param_validation import Options
-from ._base import ESSENTIAL_POLICIES, DiagramTransformer
+from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from ._compiled import entropies, statistics
 
 __all__ = ["DiagramStatistics", "PersistenceEntropy"]
 
@@ -18,39 +19,11 @@ _COMMON: dict = {
 }
 
 
-class _Summary(DiagramTransformer):
+class _Summary(PackedVectorizer):
     """Per-diagram numbers that need nothing learned but the essential policy."""
 
-    def fit(self, X, y=None):
-        """Validate the samples (and learn the clipping values of ``essential="clip"``).
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        self._fit_samples(X)
-        return self
-
-    def transform(self, X):
-        """The numbers of each diagram of each sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (n_samples, n_diagrams * n_numbers)
-        """
-        return self._parallel_rows(self._checked_parts(X), self._transform_part)
-
-    def _transform_part(self, k, diagrams):
-        return np.array([self._numbers(d) for d in diagrams]).reshape(len(diagrams), -1)
+    def _fit_positions(self, packed):
+        pass
 
     def get_feature_names_out(self, input_features=None):
         """``d<k>_<number>``, per diagram position ``k``.
@@ -118,17 +91,8 @@ class PersistenceEntropy(_Summary):
     def _names(self):
         return ["entropy"]
 
-    def _numbers(self, diagram):
-        persistence = diagram[:, 1] - diagram[:, 0]
-        persistence = persistence[persistence > 0]
-        total = persistence.sum()
-        if total <= 0:
-            return [0.0]
-        shares = persistence / total
-        entropy = float(-np.dot(shares, np.log(shares)))
-        if self.normalized:
-            entropy = entropy / np.log(len(shares)) if len(shares) > 1 else 0.0
-        return [entropy]
+    def _compute(self, k, points, starts, stops):
+        return entropies(points, starts, stops, bool(self.normalized))
 
 
 class DiagramStatistics(_Summary):
@@ -188,16 +152,5 @@ class DiagramStatistics(_Summary):
             + ["mean_birth", "mean_death"]
         )
 
-    def _numbers(self, diagram):
-        if not len(diagram):
-            return [0.0] * (6 + len(self.quantiles))
-        persistence = diagram[:, 1] - diagram[:, 0]
-        return [
-            float(len(diagram)),
-            persistence.sum(),
-            persistence.max(),
-            persistence.mean(),
-            *np.quantile(persistence, np.asarray(self.quantiles, dtype=float)),
-            diagram[:, 0].mean(),
-            diagram[:, 1].mean(),
-        ]
+    def _compute(self, k, points, starts, stops):
+        return statistics(points, starts, stops, np.asarray(self.quantiles, dtype=np.float64))
