@@ -158,7 +158,8 @@ def table_kernels(diagrams, n_jobs):
     pairs = {
         "sliced Wasserstein (10 directions)": (
             lambda: SlicedWassersteinKernel(bandwidth=1.0, n_directions=10, n_jobs=n_jobs),
-            lambda: rep.SlicedWassersteinKernel(num_directions=10, bandwidth=1.0),
+            # gudhi drops one of its num_directions lines and uses exp(-SW / bandwidth)
+            lambda: rep.SlicedWassersteinKernel(num_directions=11, bandwidth=2.0),
         ),
         "persistence scale-space": (
             lambda: PersistenceScaleSpaceKernel(bandwidth=0.1, n_jobs=n_jobs),

@@ -18,6 +18,7 @@ from .diagrams import (
     from_gudhi,
     from_persim,
     pairwise_diagram_distances,
+    sliced_wasserstein_distance,
     to_giotto,
     to_gudhi,
     to_persim,
@@ -48,7 +49,10 @@ from .vectorization import (
     PersistenceEntropy,
     PersistenceImage,
     PersistenceLandscape,
+    PersistenceScaleSpaceKernel,
+    PersistenceWeightedGaussianKernel,
     Silhouette,
+    SlicedWassersteinKernel,
 )
 
 __version__ = "0.1.0.dev0"
@@ -60,7 +64,10 @@ __all__ = [
     "PersistenceEntropy",
     "PersistenceImage",
     "PersistenceLandscape",
+    "PersistenceScaleSpaceKernel",
+    "PersistenceWeightedGaussianKernel",
     "Silhouette",
+    "SlicedWassersteinKernel",
     "CombinedDistance",
     "CleaningReport",
     "DiagramDistance",
@@ -85,6 +92,7 @@ __all__ = [
     "make_mesh_distance",
     "make_shapes",
     "pairwise_diagram_distances",
+    "sliced_wasserstein_distance",
     "to_giotto",
     "to_gudhi",
     "to_persim",

@@ -1,7 +1,8 @@
 """The diagram stage: validation, distances between diagrams and the distance transformer.
 
 - :mod:`.validation`: ``check_diagram``, ``check_sample``, ``check_samples``;
-- :mod:`.distances`: ``bottleneck_distance``, ``wasserstein_distance`` and the registry
+- :mod:`.distances`: ``bottleneck_distance``, ``wasserstein_distance``,
+  ``sliced_wasserstein_distance`` (over :mod:`._sliced`) and the registry
   ``METRICS``, over the compiled kernels :mod:`._bottleneck` (threshold search and
   minimax augmenting paths), :mod:`._wasserstein` (optimal assignment) and
   :mod:`._assignment` (what they share);
@@ -12,7 +13,12 @@
 """
 
 from .converters import from_giotto, from_gudhi, from_persim, to_giotto, to_gudhi, to_persim
-from .distances import METRICS, bottleneck_distance, wasserstein_distance
+from .distances import (
+    METRICS,
+    bottleneck_distance,
+    sliced_wasserstein_distance,
+    wasserstein_distance,
+)
 from .pairwise import pairwise_diagram_distances
 from .transformer import DiagramDistance
 from .validation import check_diagram, check_sample, check_samples
@@ -24,6 +30,7 @@ __all__ = [
     "check_diagram",
     "check_sample",
     "check_samples",
+    "sliced_wasserstein_distance",
     "from_giotto",
     "from_gudhi",
     "from_persim",

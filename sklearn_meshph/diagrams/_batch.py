@@ -2,8 +2,9 @@
 
 A sample is a tuple of diagrams compared position by position, as the typed disjoint
 union of its diagrams: the bottleneck distance is the maximum of the per-diagram
-distances, the q-Wasserstein distance the l_q norm of them, essential points (death
-``inf``) matched among themselves by sorted birth.
+distances, the q-Wasserstein distance the l_q norm of them, the sliced Wasserstein
+distance their sum; essential points (death ``inf``) are matched among themselves by
+sorted birth.
 """
 
 from __future__ import annotations
@@ -12,11 +13,12 @@ import numba
 import numpy as np
 
 from ._bottleneck import SMALL_PAIRS, bottleneck_finite, bottleneck_small
+from ._sliced import directions, project, sliced_pairs
 from ._wasserstein import power, power_of_two_above, wasserstein_scaled
 
-__all__ = ["pack", "pack_one", "pair_distances", "split_diagram"]
+__all__ = ["pack", "pack_one", "pack_sliced", "pair_distances", "split_diagram"]
 
-BOTTLENECK, WASSERSTEIN = 0, 1
+BOTTLENECK, WASSERSTEIN, SLICED = 0, 1, 2
 
 
 @numba.njit(cache=True, inline="always")
@@ -131,16 +133,29 @@ def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return points, offsets, births.astype(np.float64), essential_offsets.astype(np.int64)
 
 
+def pack_sliced(packed, n_directions: int):
+    """A :func:`pack` (or :func:`pack_one`) result as the sliced Wasserstein kernel reads
+    it: each diagram's sorted projections on the ``n_directions`` lines and sorted
+    diagonal projections (replacing the points) with their offsets, essential births and
+    theirs."""
+    points, offsets, births, birth_offsets = packed
+    cos, sin = directions(n_directions)
+    projected, diagonal, slots = project(points, offsets, cos, sin)
+    return projected, diagonal, slots, births, birth_offsets
+
+
 def pair_distances(left, right, rows, cols, n_parts, metric, order=2.0, internal_p=np.inf):
     """Distances of the sample pairs ``(rows[k], cols[k])`` of two packed sets.
 
-    ``metric`` is a kernel code, ``BOTTLENECK`` or ``WASSERSTEIN``. Each metric has its
-    own compiled loop, and the bottleneck threshold search is only called (and compiled)
-    for pairs of diagrams too large for the minimax algorithm: a first run compiles only
-    what it uses.
+    ``metric`` is a kernel code, ``BOTTLENECK``, ``WASSERSTEIN`` or ``SLICED`` (whose sets
+    are packed by :func:`pack_sliced`). Each metric has its own compiled loop, and the
+    bottleneck threshold search is only called (and compiled) for pairs of diagrams too
+    large for the minimax algorithm: a first run compiles only what it uses.
     """
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
+    if metric == SLICED:
+        return sliced_pairs(left, right, rows, cols, n_parts)
     if metric == WASSERSTEIN:
         return _wasserstein_pairs(left, right, rows, cols, n_parts, float(order), float(internal_p))
     out = _bottleneck_pairs(left, right, rows, cols, n_parts, SMALL_PAIRS)

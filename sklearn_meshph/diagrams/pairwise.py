@@ -1,7 +1,9 @@
-"""Pairwise distance matrices between collections of diagrams, in parallel blocks."""
+"""Pairwise distance matrices between collections of diagrams, in parallel blocks, and
+the block machinery that the diagram kernels share."""
 
 from __future__ import annotations
 
+from functools import partial
 from numbers import Integral, Real
 
 import numpy as np
@@ -9,11 +11,11 @@ from joblib import delayed, effective_n_jobs
 
 from .._param_validation import Interval, Options, validate_params
 from .._progress import parallel, track
-from ._batch import pack, pair_distances
+from ._batch import SLICED, pack, pack_sliced, pair_distances
 from .distances import METRICS, kernel_metric
 from .validation import check_samples
 
-__all__ = ["pairwise_diagram_distances"]
+__all__ = ["pair_matrix", "pairwise_diagram_distances"]
 
 
 # Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
@@ -29,14 +31,15 @@ def _row_blocks(n_rows, pairs_per_row, n_tasks):
     return np.unique(bounds)
 
 
-def _block_distances(left, right, start, stop, n_cols, symmetric, n_parts, code, order, p):
-    """Distances of rows ``start:stop`` (to the later columns only when symmetric)."""
+def _block(function, left, right, start, stop, n_cols, symmetric, first):
+    """``function`` on the pairs of rows ``start:stop``: with every column, or when
+    symmetric with the columns from ``i + first`` on (``first`` 0: with the diagonal)."""
     if symmetric:
-        rows = np.concatenate([np.full(n_cols - i - 1, i) for i in range(start, stop)])
-        cols = np.concatenate([np.arange(i + 1, n_cols) for i in range(start, stop)])
+        rows = np.concatenate([np.full(n_cols - i - first, i) for i in range(start, stop)])
+        cols = np.concatenate([np.arange(i + first, n_cols) for i in range(start, stop)])
     else:
         rows, cols = np.divmod(np.arange(start * n_cols, stop * n_cols), n_cols)
-    return pair_distances(left, right, rows, cols, n_parts, code, order, p)
+    return function(left, right, rows, cols)
 
 
 @validate_params(
@@ -46,6 +49,7 @@ def _block_distances(left, right, start, stop, n_cols, symmetric, n_parts, code,
         "internal_p": [Interval(Real, 1, None, closed="left")],
         "n_jobs": [Integral, None],
         "verbose": [Interval(Integral, 0, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, None, closed="left")],
     }
 )
 def pairwise_diagram_distances(
@@ -59,6 +63,7 @@ def pairwise_diagram_distances(
     dtype=np.float64,
     out=None,
     verbose=0,
+    n_directions=10,
 ) -> np.ndarray:
     """Distance matrix between two collections of diagrams (or of tuples of diagrams).
 
@@ -74,7 +79,8 @@ def pairwise_diagram_distances(
     Y : sequence of diagrams or of tuples of diagrams, optional
         The columns; ``None`` gives the symmetric matrix of ``X``, each unordered pair
         computed once.
-    metric : {"bottleneck", "wasserstein"}, default="bottleneck"
+    metric : {"bottleneck", "wasserstein", "sliced-wasserstein"}, default="bottleneck"
+        See :class:`DiagramDistance`.
     order : float, default=2.0
         The Wasserstein exponent q.
     internal_p : float, default=inf
@@ -89,6 +95,8 @@ def pairwise_diagram_distances(
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the blocks of pairs on stderr (needs
         tqdm, the ``progress`` extra); nothing is printed at 0.
+    n_directions : int, default=10
+        Number of lines of the sliced Wasserstein distance (ignored by the others).
 
     Returns
     -------
@@ -114,42 +122,96 @@ def pairwise_diagram_distances(
     if out is not None and out.shape != shape:
         raise ValueError(f"out has shape {out.shape}, expected {shape}")
     return distance_matrix(
-        left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=verbose
+        left,
+        right,
+        metric,
+        order,
+        internal_p,
+        n_jobs,
+        dtype,
+        out,
+        verbose=verbose,
+        n_directions=n_directions,
     )
 
 
-def distance_matrix(left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=0):
+def distance_matrix(
+    left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=0, n_directions=10
+):
     """:func:`pairwise_diagram_distances` on validated samples."""
     code, order = kernel_metric(metric, order, internal_p)
-    internal_p = float(internal_p)
+    n_parts = len(left[0]) if len(left) else 0
+    packed_left = pack(left)
+    packed_right = None if right is None else pack(right)
+    if code == SLICED:
+        packed_left = pack_sliced(packed_left, n_directions)
+        packed_right = None if right is None else pack_sliced(packed_right, n_directions)
+    function = partial(
+        pair_distances,
+        n_parts=n_parts,
+        metric=code,
+        order=order,
+        internal_p=float(internal_p),
+    )
+    return pair_matrix(
+        function,
+        packed_left,
+        packed_right,
+        len(left),
+        len(left if right is None else right),
+        n_jobs=n_jobs,
+        dtype=dtype,
+        out=out,
+        verbose=verbose,
+    )
+
+
+def pair_matrix(
+    function,
+    left,
+    right,
+    n,
+    m,
+    *,
+    n_jobs=None,
+    dtype=np.float64,
+    out=None,
+    verbose=0,
+    diagonal=0.0,
+    desc="distances",
+):
+    """The ``(n, m)`` matrix of ``function(left, right, rows, cols)`` (the values of the
+    pairs ``(rows[k], cols[k])``), over blocks of rows in parallel.
+
+    ``left`` and ``right`` are whatever ``function`` reads (packed samples); with
+    ``right=None`` the matrix is symmetric (``m == n``), each unordered pair computed
+    once and mirrored, and its diagonal is ``diagonal``, or computed if it is None.
+    Blocks hold about equal numbers of pairs, a few per worker and at most a million
+    each; results do not depend on the blocks, so neither on ``n_jobs`` nor the backend.
+    """
     symmetric = right is None
     right = left if symmetric else right
-    n, m = len(left), len(right)
-    n_parts = len(left[0]) if n else 0
-    packed_left = pack(left)
-    packed_right = packed_left if symmetric else pack(right)
-    pairs_per_row = np.arange(n - 1, -1, -1) if symmetric else np.full(n, m)
+    first = 0 if symmetric and diagonal is None else 1
+    pairs_per_row = np.arange(n - first, -first, -1) if symmetric else np.full(n, m)
     total = int(pairs_per_row.sum())
     n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
     bounds = _row_blocks(n, pairs_per_row, n_tasks)
     matrix = np.zeros((n, m), dtype=dtype) if out is None else out
     tasks = parallel(n_jobs)(
-        delayed(_block_distances)(
-            packed_left, packed_right, a, b, m, symmetric, n_parts, code, order, internal_p
-        )
+        delayed(_block)(function, left, right, a, b, m, symmetric, first)
         for a, b in zip(bounds[:-1], bounds[1:], strict=True)
     )
-    blocks = track(tasks, total=len(bounds) - 1, desc="distances", verbose=verbose)
+    blocks = track(tasks, total=len(bounds) - 1, desc=desc, verbose=verbose)
     for a, b, values in zip(bounds[:-1], bounds[1:], blocks, strict=True):
         if symmetric:
             position = 0
             for i in range(a, b):
-                row = values[position : position + n - i - 1]
-                matrix[i, i + 1 :] = row
-                matrix[i + 1 :, i] = row
-                position += n - i - 1
+                row = values[position : position + n - i - first]
+                matrix[i, i + first :] = row
+                matrix[i + first :, i] = row
+                position += n - i - first
         else:
             matrix[a:b] = values.reshape(b - a, m)
-    if symmetric:
-        matrix[np.arange(n), np.arange(n)] = 0
+    if symmetric and diagonal is not None:
+        matrix[np.arange(n), np.arange(n)] = diagonal
     return matrix

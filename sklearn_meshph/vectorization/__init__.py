@@ -3,6 +3,11 @@ kernels (precomputed kernel matrices) of persistence diagrams."""
 
 from .curves import BettiCurve, EntropyCurve, PersistenceLandscape, Silhouette
 from .images import PersistenceImage
+from .kernels import (
+    PersistenceScaleSpaceKernel,
+    PersistenceWeightedGaussianKernel,
+    SlicedWassersteinKernel,
+)
 from .summaries import DiagramStatistics, PersistenceEntropy
 
 __all__ = [
@@ -12,5 +17,8 @@ __all__ = [
     "PersistenceEntropy",
     "PersistenceImage",
     "PersistenceLandscape",
+    "PersistenceScaleSpaceKernel",
+    "PersistenceWeightedGaussianKernel",
     "Silhouette",
+    "SlicedWassersteinKernel",
 ]
