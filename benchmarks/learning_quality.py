@@ -9,7 +9,10 @@ nearest other mesh), with the time of each configuration beside it (loading excl
 eigensolves cached across configurations with the same eigen stage: the time of the
 first one includes the solves). Collections: the SHREC'07 Watertight development half
 and the Sumner meshes (from SKLEARN_MESHPH_DATA, default ../shared/data) and
-``make_shapes``. The baselines (Shape-DNA) run in the same process.
+``make_shapes``. The baselines (Shape-DNA, and the Gromov-Hausdorff signatures of
+``gh_signatures.py`` that the paper compares itself with, unless ``--no-gh``) run in the
+same process; learned models on the default's diagrams are scored by nested
+cross-validation (unless ``--no-models``).
 """
 
 from __future__ import annotations
@@ -247,6 +250,32 @@ def nested_models(fields, y, n_jobs):
     return results
 
 
+GH_ROWS = {
+    "H0+H1": "GH comparator (Chazal et al. 2009): Rips H0+H1 of geodesics, bottleneck",
+    "H1": "GH comparator, Rips H1 only",
+    "H0": "GH comparator, Rips H0 only",
+}
+
+
+def gh_comparator(meshes, y, n_jobs, results, name):
+    """The metric-based signatures the paper compares itself with (gh_signatures.py):
+    scored with the same protocol, timed per mesh."""
+    try:
+        from gh_signatures import N_SAMPLES, gh_distance_matrices, rips_backend
+
+        backend = rips_backend()
+    except ImportError as error:
+        print(f"  no GH comparator: {error} (needs ripser or gudhi, the bench extra)")
+        return
+    start = time.perf_counter()
+    found = gh_distance_matrices(meshes, n_jobs=n_jobs)
+    seconds = time.perf_counter() - start
+    for key, row in GH_ROWS.items():
+        results[row, name] = (loo_1nn(found[key], y), cv_1nn(found[key], y), seconds)
+        print(f"  {name:15s} {row}: {results[row, name][0]:.3f}", flush=True)
+    print(f"  ({N_SAMPLES} farthest-point samples per mesh, {backend[0]} {backend[1]})")
+
+
 def collection(name, n_jobs):
     if name == "shapes":
         data = make_shapes(n_per_class=10, random_state=0)
@@ -274,6 +303,12 @@ def main():
     parser.add_argument(
         "--no-models", dest="models", action="store_false", help="skip the learned models"
     )
+    parser.add_argument(
+        "--no-gh",
+        dest="gh",
+        action="store_false",
+        help="skip the Gromov-Hausdorff comparator (gh_signatures.py; minutes per collection)",
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as temporary:
         memory = joblib.Memory(args.cache or temporary, verbose=0)
@@ -281,7 +316,7 @@ def main():
 
 
 def run(args, memory):
-    results, loading = {}, {}
+    results, loading, n_meshes = {}, {}, {}
     for name in args.collections:
         if name != "shapes" and not (DATA / name).is_dir():
             print(f"skipping {name}: not found in {DATA}")
@@ -298,6 +333,9 @@ def run(args, memory):
             print(f"  {name:15s} {config}: {results[config, name][0]:.3f}", flush=True)
             if config.startswith("default ("):
                 default_fields, default_distance = fields, distances
+        if args.gh:
+            gh_comparator(meshes, y, args.n_jobs, results, name)
+        n_meshes[name] = len(meshes)
         nested, chosen = nested_weights(default_fields, default_distance, y)
         print(f"  {name:15s} nested CV of the default's weights: {nested:.3f}; chosen {chosen}")
         results["nested", name] = nested
@@ -311,14 +349,22 @@ def run(args, memory):
         )
     names = [n for n in args.collections if ("nested", n) in results]
     print("\nLeave-one-out and 10 x 5-fold 1-NN accuracy; seconds from loaded meshes to the")
-    print("matrix (the first configuration of an eigen stage includes its eigensolves):\n")
-    print("| configuration | " + " | ".join(f"{n} LOO | {n} 5-fold | {n} s" for n in names) + " |")
-    print("|---|" + "---|---|---|" * len(names))
-    for config in configurations(memory, args.n_jobs):
+    print("matrix (the first configuration of an eigen stage includes its eigensolves), and")
+    print("milliseconds per mesh:\n")
+    print(
+        "| configuration | "
+        + " | ".join(f"{n} LOO | {n} 5-fold | {n} s | {n} ms/mesh" for n in names)
+        + " |"
+    )
+    print("|---|" + "---|---|---|---|" * len(names))
+    rows = list(configurations(memory, args.n_jobs))
+    rows += [row for row in GH_ROWS.values() if any((row, n) in results for n in names)]
+    for config in rows:
         cells = []
         for n in names:
             loo, cv, seconds = results.get((config, n), (float("nan"),) * 3)
             cells += [f"{loo:.3f}", f"{cv:.3f}", f"{seconds:.1f}"]
+            cells.append(f"{1000 * seconds / n_meshes[n]:.0f}")
         print(f"| {config} | " + " | ".join(cells) + " |")
     baseline = "Shape-DNA 30, Canberra (preset shape-dna)"
     print(
