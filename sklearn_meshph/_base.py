@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
@@ -22,6 +22,11 @@ def as_sample_list(X, what: str = "meshes") -> list:
         raise TypeError(
             f"X must be a sequence of {what} (one per sample), got a single "
             f"{type(X).__name__}; wrap it in a list"
+        )
+    if isinstance(X, Mapping):
+        raise TypeError(
+            f"X must be a sequence of {what}, got a {type(X).__name__} (iterating it would "
+            "give its keys); pass list(X.values()) or list(X.keys())"
         )
     if not isinstance(X, Sequence) and not hasattr(X, "__iter__"):
         raise TypeError(f"X must be a sequence of {what}, got {type(X).__name__}")
@@ -47,6 +52,22 @@ class SampleTransformer(TransformerMixin, BaseEstimator):
 
     def _check_samples(self, X) -> list:
         return as_sample_list(X, self._sample_kind)
+
+    def fit_transform(self, X, y=None, **fit_params):
+        """``fit(X)`` then ``transform(X)``, ``X`` read once (a generator works).
+
+        Parameters
+        ----------
+        X : iterable of samples
+        y : ignored
+        **fit_params : passed to ``fit``
+
+        Returns
+        -------
+        The output of ``transform``.
+        """
+        samples = as_sample_list(X, self._sample_kind)
+        return self.fit(samples, y, **fit_params).transform(samples)
 
     def fit(self, X, y=None):
         """Check the parameters and the samples; learns nothing unless overridden.

@@ -10,6 +10,7 @@ from sklearn.base import BaseEstimator, TransformerMixin, clone
 from sklearn.metrics import pairwise_distances
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._base import as_sample_list
 from ._param_validation import check_params
 
 __all__ = ["CombinedDistance", "FeatureDistance"]
@@ -213,6 +214,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         ndarray of shape (n_samples, n_samples)
         """
         self._check()
+        X = as_sample_list(X, "samples")  # every part reads X: a generator is read once
         self.parts_ = [(name, clone(part)) for name, part in self.transformer_list]
         matrices = [part.fit_transform(X) for _, part in self.parts_]
         self.scales_ = {}
@@ -258,6 +260,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         ndarray of shape (len(X), n_fitted)
         """
         check_is_fitted(self, "parts_")
+        X = as_sample_list(X, "samples")
         return self._combine([part.transform(X) for _, part in self.parts_])
 
     def __sklearn_tags__(self):

@@ -273,3 +273,31 @@ def test_load_watertight_folder(watertight_dir):
     vertices, faces = check_mesh(data.filenames[0])
     np.testing.assert_array_equal(vertices, data.data[0].vertices)
     np.testing.assert_array_equal(faces, data.data[0].faces)
+
+
+def test_archives_and_containers_are_refused_before_trimesh_opens_them(tmp_path, sphere):
+    import zipfile
+
+    inner = write(tmp_path / "inner.off", sphere)
+    # A zip bomb in miniature: trimesh would open the archive and inflate its members.
+    bomb = tmp_path / "shapes.zip"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.write(inner, "inner.off")
+        archive.writestr("zeros.off", b"\0" * 10_000_000)
+    with pytest.raises(ValueError, match=r"shapes\.zip.* is a \.zip file.*archives"):
+        check_mesh(bomb)
+    for name in ("model.3mf", "scene.tar", "x.dae"):
+        other = tmp_path / name
+        other.write_bytes(bomb.read_bytes())
+        with pytest.raises(ValueError, match="formats read are .obj, .ply, .off, .stl, .glb"):
+            check_mesh(other)
+    # A zip whatever its name (plain or compressed) is refused too.
+    disguised = tmp_path / "disguised.stl"
+    disguised.write_bytes(bomb.read_bytes())
+    with pytest.raises(ValueError, match=r"disguised\.stl.* is a zip archive"):
+        check_mesh(disguised)
+    compressed = tmp_path / "disguised.off.gz"
+    compressed.write_bytes(gzip.compress(bomb.read_bytes()))
+    with pytest.raises(ValueError, match=r"disguised\.off\.gz.* is a zip archive"):
+        check_mesh(compressed)
+    assert reading.MESH_FORMATS == ("obj", "ply", "off", "stl", "glb")

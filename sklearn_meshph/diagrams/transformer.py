@@ -7,7 +7,7 @@ from numbers import Integral, Real
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from .._base import SampleTransformer
+from .._base import SampleTransformer, as_sample_list
 from .._param_validation import Interval, Options
 from .distances import METRICS, kernel_metric
 from .pairwise import distance_matrix
@@ -155,6 +155,7 @@ class DiagramDistance(SampleTransformer):
 
     def _fit(self, X):
         """Fit; the fitted samples' symmetric matrix when it was computed, else None."""
+        X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         super().fit(X)
         self.diagrams_ = check_samples(X)
         self.n_diagrams_ = len(self.diagrams_[0])

@@ -1,8 +1,12 @@
 """Reading mesh files (through trimesh), with errors that name the file.
 
-Compressed files (``.gz``, ``.bz2``, ``.xz``, e.g. ``bunny.off.gz``) are decompressed
-in memory with the standard library, never to more than ``MAX_DECOMPRESSED_SIZE``
-bytes, and handed to trimesh with the format of the inner name (``.off``).
+Only the formats of ``MESH_FORMATS`` are read (OBJ, PLY, OFF, STL, GLB): trimesh also
+opens archives and containers (``.zip``, ``.tar``, 3MF, which is a zip), whose content
+could expand without bound, so any other format is refused before trimesh sees it, and
+so is a file whose content is a zip archive whatever its name. Compressed files
+(``.gz``, ``.bz2``, ``.xz``, e.g. ``bunny.off.gz``) are decompressed in memory with the
+standard library, never to more than ``MAX_DECOMPRESSED_SIZE`` bytes, and handed to
+trimesh with the format of the inner name (``.off``).
 """
 
 from __future__ import annotations
@@ -14,7 +18,19 @@ import lzma
 import os
 import zlib
 
-__all__ = ["COMPRESSIONS", "MAX_DECOMPRESSED_SIZE", "read_mesh_file", "split_compression"]
+__all__ = [
+    "COMPRESSIONS",
+    "MAX_DECOMPRESSED_SIZE",
+    "MESH_FORMATS",
+    "read_mesh_file",
+    "split_compression",
+]
+
+#: The mesh formats read (file name endings without the dot), each possibly compressed.
+MESH_FORMATS = ("obj", "ply", "off", "stl", "glb")
+
+# The first bytes of a zip archive (also of 3MF, and of empty or spanned archives).
+_ZIP_MAGIC = (b"PK\x03\x04", b"PK\x05\x06", b"PK\x07\x08")
 
 #: Largest decompressed size of a compressed mesh file, in bytes (2 GiB). A file that
 #: decompresses beyond it is refused (decompression stops at the limit), so that a
@@ -89,7 +105,8 @@ def read_mesh_file(path, place: str = "mesh", *, max_decompressed_size: int | No
     Raises
     ------
     ValueError
-        If the path does not exist or is not a file, the file is empty, cannot be
+        If the path does not exist or is not a file, is not one of ``MESH_FORMATS`` or
+        holds a zip archive, the file is empty, cannot be
         decompressed or decompresses beyond the limit, is not a mesh format trimesh
         reads, cannot be parsed, or holds no triangle. The message names the file.
     """
@@ -107,13 +124,24 @@ def read_mesh_file(path, place: str = "mesh", *, max_decompressed_size: int | No
         raise ValueError(
             f"{place}: cannot tell the mesh format of {path!r} (no extension, such as .off)"
         )
+    if file_type not in MESH_FORMATS:
+        raise ValueError(
+            f"{place}: {path!r} is a .{file_type} file; the mesh formats read are "
+            f"{', '.join('.' + f for f in MESH_FORMATS)} (each possibly .gz, .bz2 or .xz); "
+            "archives and containers are refused"
+        )
     if compression is None:
+        with open(path, "rb") as stream:
+            head = stream.read(4)
         source = path
     else:
         limit = MAX_DECOMPRESSED_SIZE if max_decompressed_size is None else max_decompressed_size
         source = _decompress(path, compression, place, int(limit))
         if source.getbuffer().nbytes == 0:
             raise ValueError(f"{place}: mesh file {path!r} is empty once decompressed")
+        head = bytes(source.getbuffer()[:4])
+    if head in _ZIP_MAGIC:
+        raise ValueError(f"{place}: mesh file {path!r} is a zip archive; archives are refused")
     try:
         loaded = trimesh.load(source, file_type=file_type, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on malformed files

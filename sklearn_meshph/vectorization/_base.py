@@ -7,7 +7,7 @@ import numpy as np
 from joblib import delayed, effective_n_jobs
 from sklearn.utils.validation import check_is_fitted
 
-from .._base import SampleTransformer
+from .._base import SampleTransformer, as_sample_list
 from .._progress import parallel
 from ..diagrams.validation import check_samples
 
@@ -69,6 +69,7 @@ class DiagramTransformer(SampleTransformer):
 
     def _fit_samples(self, X):
         """Validate and store what every vectorizer learns; returns the finite parts."""
+        X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         super().fit(X)
         samples = check_samples(X)
         self.n_diagrams_ = len(samples[0])
@@ -151,7 +152,6 @@ _EMPTY = np.empty((0, 2))
 def pack_samples(X, n_diagrams: int | None = None) -> Packed:
     """Validate samples of diagrams (the rules of :func:`check_samples`, the same
     messages) and pack them."""
-    from .._base import as_sample_list
     from ..diagrams.validation import check_diagram
 
     samples = as_sample_list(X, "diagrams")
@@ -228,6 +228,7 @@ class PackedVectorizer(DiagramTransformer):
     position ``k`` for the diagrams ``starts:stops`` of ``points``."""
 
     def _fit_packed(self, X) -> Packed:
+        X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         SampleTransformer.fit(self, X)
         packed = pack_samples(X)
         self.n_diagrams_ = packed.n_diagrams
