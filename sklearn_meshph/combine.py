@@ -3,6 +3,7 @@ weighted combinations of several distance matrices."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from numbers import Integral
 
 import numpy as np
@@ -10,12 +11,19 @@ from sklearn.base import BaseEstimator, TransformerMixin, clone
 from sklearn.metrics import pairwise_distances
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._base import as_sample_list
 from ._param_validation import check_params
 
 __all__ = ["CombinedDistance", "FeatureDistance"]
 
 NORMALIZATIONS = ("median", "none")
+
+
+def _reusable(X):
+    """``X`` itself when it can be read several times (arrays, lists...), else a list
+    of it (a generator or another one-shot iterator)."""
+    if isinstance(X, Mapping):
+        raise TypeError(f"X must be a sequence of samples, got a {type(X).__name__}")
+    return X if hasattr(X, "__len__") and hasattr(X, "__getitem__") else list(X)
 
 
 class FeatureDistance(TransformerMixin, BaseEstimator):
@@ -214,7 +222,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         ndarray of shape (n_samples, n_samples)
         """
         self._check()
-        X = as_sample_list(X, "samples")  # every part reads X: a generator is read once
+        X = _reusable(X)  # every part reads X: a generator is read once
         self.parts_ = [(name, clone(part)) for name, part in self.transformer_list]
         matrices = [part.fit_transform(X) for _, part in self.parts_]
         self.scales_ = {}
@@ -260,7 +268,7 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         ndarray of shape (len(X), n_fitted)
         """
         check_is_fitted(self, "parts_")
-        X = as_sample_list(X, "samples")
+        X = _reusable(X)
         return self._combine([part.transform(X) for _, part in self.parts_])
 
     def __sklearn_tags__(self):

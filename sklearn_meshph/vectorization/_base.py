@@ -3,17 +3,33 @@ essential points, and what ``fit`` learns per diagram position."""
 
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
 from joblib import delayed, effective_n_jobs
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list
+from .._param_validation import Options
 from .._progress import parallel
 from ..diagrams.validation import check_samples
 
-__all__ = ["ESSENTIAL_POLICIES", "DiagramTransformer", "chunks", "finite_parts"]
+__all__ = [
+    "COMMON_CONSTRAINTS",
+    "ESSENTIAL_POLICIES",
+    "DiagramTransformer",
+    "chunks",
+    "finite_parts",
+]
 
 ESSENTIAL_POLICIES = ("drop", "clip", "error")
+
+#: The parameters every vectorizer and kernel has, and their constraints.
+COMMON_CONSTRAINTS: dict = {
+    "essential": [Options(ESSENTIAL_POLICIES)],
+    "n_jobs": [Integral, None],
+    "dtype": [Options(("float64", "float32"))],
+}
 
 # Samples per parallel task at most: bounds the memory of the rows in flight.
 _CHUNK = 2048

@@ -7,8 +7,8 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._param_validation import Interval, Options
-from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from .._param_validation import Interval
+from ._base import COMMON_CONSTRAINTS, PackedVectorizer
 from ._compiled import betti_curves, entropy_curves, landscapes, silhouettes
 
 __all__ = ["BettiCurve", "EntropyCurve", "PersistenceLandscape", "Silhouette", "sample_grid"]
@@ -36,9 +36,7 @@ _GRID_CONSTRAINTS: dict = {
     "resolution": [Interval(Integral, 1, None, closed="left")],
     "sample_range": [tuple, list, None],
     "keep_endpoints": ["boolean"],
-    "essential": [Options(ESSENTIAL_POLICIES)],
-    "n_jobs": [Integral, None],
-    "dtype": [Options(("float64", "float32"))],
+    **COMMON_CONSTRAINTS,
 }
 
 _GRID_PARAMETERS = """resolution : int, default=100

@@ -7,7 +7,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from .._param_validation import Interval, Options
-from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from ._base import COMMON_CONSTRAINTS, PackedVectorizer
 from ._compiled import images
 
 __all__ = ["PersistenceImage"]
@@ -105,9 +105,7 @@ class PersistenceImage(PackedVectorizer):
         "im_range": [tuple, list, None],
         "sampling": [Options(("point", "pixel"))],
         "weight": [Options(("constant", "persistence")), callable],
-        "essential": [Options(ESSENTIAL_POLICIES)],
-        "n_jobs": [Integral, None],
-        "dtype": [Options(("float64", "float32"))],
+        **COMMON_CONSTRAINTS,
     }
 
     def __init__(

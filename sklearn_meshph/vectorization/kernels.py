@@ -21,7 +21,7 @@ from ..diagrams._assignment import precedes
 from ..diagrams._batch import pack, pack_sliced
 from ..diagrams._sliced import sliced_pairs
 from ..diagrams.pairwise import pair_matrix
-from ._base import ESSENTIAL_POLICIES, DiagramTransformer
+from ._base import COMMON_CONSTRAINTS, DiagramTransformer
 
 __all__ = [
     "PersistenceScaleSpaceKernel",
@@ -99,11 +99,9 @@ class _DiagramKernel(DiagramTransformer):
         )
 
 
-_COMMON_CONSTRAINTS: dict = {
+_KERNEL_CONSTRAINTS: dict = {
     "bandwidth": [Interval(Real, 0, None, closed="neither")],
-    "essential": [Options(ESSENTIAL_POLICIES)],
-    "n_jobs": [Integral, None],
-    "dtype": [Options(("float64", "float32"))],
+    **COMMON_CONSTRAINTS,
 }
 
 
@@ -189,7 +187,7 @@ class SlicedWassersteinKernel(_DiagramKernel):
     """
 
     _parameter_constraints: dict = {
-        **_COMMON_CONSTRAINTS,
+        **_KERNEL_CONSTRAINTS,
         "n_directions": [Interval(Integral, 1, None, closed="left")],
     }
 
@@ -326,7 +324,7 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
            [0.   , 0.   , 0.   ]])
     """
 
-    _parameter_constraints: dict = dict(_COMMON_CONSTRAINTS)
+    _parameter_constraints: dict = dict(_KERNEL_CONSTRAINTS)
 
     def __init__(self, bandwidth=1.0, essential="drop", n_jobs=None, dtype="float64"):
         self.bandwidth = bandwidth
@@ -460,7 +458,7 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
     """
 
     _parameter_constraints: dict = {
-        **_COMMON_CONSTRAINTS,
+        **_KERNEL_CONSTRAINTS,
         "weight": [Options(("constant", "persistence")), callable],
         "power": [Interval(Real, 0, None, closed="left")],
     }

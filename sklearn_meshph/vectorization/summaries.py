@@ -2,21 +2,12 @@
 
 from __future__ import annotations
 
-from numbers import Integral
-
 import numpy as np
 
-from .._param_validation import Options
-from ._base import ESSENTIAL_POLICIES, PackedVectorizer
+from ._base import COMMON_CONSTRAINTS, PackedVectorizer
 from ._compiled import entropies, statistics
 
 __all__ = ["DiagramStatistics", "PersistenceEntropy"]
-
-_COMMON: dict = {
-    "essential": [Options(ESSENTIAL_POLICIES)],
-    "n_jobs": [Integral, None],
-    "dtype": [Options(("float64", "float32"))],
-}
 
 
 class _Summary(PackedVectorizer):
@@ -80,7 +71,7 @@ class PersistenceEntropy(_Summary):
     array([[0.6931]])
     """
 
-    _parameter_constraints: dict = {**_COMMON, "normalized": ["boolean"]}
+    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "normalized": ["boolean"]}
 
     def __init__(self, normalized=False, essential="drop", n_jobs=None, dtype="float64"):
         self.normalized = normalized
@@ -129,7 +120,7 @@ class DiagramStatistics(_Summary):
     array([[2., 4., 3., 2., 2., 0., 2.]])
     """
 
-    _parameter_constraints: dict = {**_COMMON, "quantiles": [tuple, list]}
+    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [tuple, list]}
 
     def __init__(
         self, quantiles=(0.1, 0.25, 0.5, 0.75, 0.9), essential="drop", n_jobs=None, dtype="float64"
