@@ -73,11 +73,11 @@ class DiagramTransformer(SampleTransformer):
     """Base of the transformers whose samples are persistence diagrams (one ``(n, 2)``
     array or a tuple of them, as :class:`LowerStarPersistence` returns).
 
-    ``fit`` validates the samples, applies the ``essential`` policy (learning, for
-    ``"clip"``, the largest finite death of each position) and calls ``_fit_parts`` with
-    the finite diagrams of each position; ``transform`` validates, applies the policy with
-    the fitted values, and computes ``_transform_part(k, diagrams)`` on blocks of samples
-    in parallel (joblib), position by position, concatenating the positions' columns.
+    ``_fit_samples(X)`` validates the samples and applies the ``essential`` policy
+    (learning, for ``"clip"``, the largest finite death of each position), returning each
+    sample as a tuple of finite diagrams; ``_checked_parts(X)`` does the same at transform
+    time with the fitted values. The kernels build on it; the vectorizers on
+    :class:`PackedVectorizer`, which does the same on one packed array.
     """
 
     _sample_kind = "diagrams"
@@ -102,21 +102,6 @@ class DiagramTransformer(SampleTransformer):
         check_is_fitted(self, "n_diagrams_")
         samples = check_samples(X, n_diagrams=self.n_diagrams_)
         return finite_parts(samples, self.essential, self.clip_values_)
-
-    def _parallel_rows(self, parts, function) -> np.ndarray:
-        """``function(k, diagrams)`` for each position ``k`` on blocks of samples, as one
-        ``(n_samples, n_features)`` array of ``self.dtype``."""
-        n_jobs = getattr(self, "n_jobs", None)
-        tasks = parallel(n_jobs)(
-            delayed(_rows)(function, parts[a:b], self.n_diagrams_, self.dtype)
-            for a, b in chunks(len(parts), n_jobs)
-        )
-        return np.vstack(list(tasks))
-
-
-def _rows(function, parts, n_diagrams, dtype):
-    columns = [function(k, [s[k] for s in parts]) for k in range(n_diagrams)]
-    return np.hstack(columns).astype(dtype, copy=False)
 
 
 # The packed path of the vectorizers -------------------------------------------------
