@@ -202,3 +202,27 @@ def test_a_corrupted_cache_entry_is_recomputed(tmp_path):
     again = est.fit_transform([mesh])[0]
     np.testing.assert_array_equal(again.values, first.values)
     assert entry.read_bytes() != b"not a pickle"  # rewritten
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-150, 1e-80, 1e80, 1e150, 1e300])
+def test_the_same_functions_at_any_scale_float64_can_represent(scale):
+    # The mesh is brought into a unit box before cleaning and assembly: nothing
+    # underflows (areas of 1e-150 meshes) or overflows (squared lengths of 1e150 ones).
+    mesh = bumpy()
+    est = LaplacianEigenTransformer(eigen_index=(1, 2, 3), random_state=0)
+    reference = est.fit_transform([mesh])[0]
+    moved = (np.asarray(mesh.vertices) * scale + 2.0 * scale, np.asarray(mesh.faces))
+    field = est.fit_transform([moved])[0]
+    np.testing.assert_allclose(field.values, reference.values, atol=1e-9)
+    np.testing.assert_allclose(field.eigenvalues, reference.eigenvalues, rtol=1e-9)
+    # normalization="none": the eigenpairs of the mesh as given, or a clear refusal
+    # when float64 cannot hold them.
+    plain = LaplacianEigenTransformer(eigen_index=1, normalization="none", random_state=0)
+    if 1e-150 <= scale <= 1e150:
+        base = plain.fit_transform([mesh])[0]
+        np.testing.assert_allclose(
+            plain.fit_transform([moved])[0].eigenvalues * scale**2, base.eigenvalues, rtol=1e-9
+        )
+    else:
+        with pytest.raises(ValueError, match="sample 0: with normalization='none'.*beyond"):
+            plain.fit_transform([moved])
