@@ -48,7 +48,7 @@ from sklearn_meshph import (
     make_shapes,
 )
 from sklearn_meshph.mesh import check_mesh
-from sklearn_meshph.spectral.transformer import mesh_eigenpairs
+from sklearn_meshph.spectral.solve import mesh_eigenpairs
 
 DATA = Path(
     os.environ.get("SKLEARN_MESHPH_DATA", Path(__file__).parents[1] / ".." / "shared" / "data")

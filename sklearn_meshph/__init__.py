@@ -35,6 +35,7 @@ from .mesh import (
 from .persistence import LowerStarPersistence, lower_star_persistence
 from .pipelines import make_mesh_distance
 from .spectral import (
+    CacheWarning,
     LaplacianEigenTransformer,
     RepeatedEigenvalueWarning,
     ShapeDNA,
@@ -58,6 +59,7 @@ from .vectorization import (
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "CacheWarning",
     "BettiCurve",
     "DiagramStatistics",
     "EntropyCurve",

@@ -10,6 +10,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from sklearn_meshph import LaplacianEigenTransformer, RepeatedEigenvalueWarning, ScalarField
+from sklearn_meshph.spectral.cache import CacheWarning
 
 
 def bumpy(subdivisions=3):
@@ -108,7 +109,7 @@ def test_repeated_eigenvalue_warns_with_multiplicity():
 
 
 def cached_calls(location: Path) -> int:
-    return sum(1 for _ in location.rglob("output.pkl"))
+    return sum(1 for _ in location.rglob("header.json"))
 
 
 def test_memory_solves_each_mesh_once_across_eigen_indices(tmp_path, make_irregular_ellipsoid):
@@ -197,11 +198,12 @@ def test_a_corrupted_cache_entry_is_recomputed(tmp_path):
     mesh = bumpy(2)
     est = LaplacianEigenTransformer(memory=str(tmp_path))
     first = est.fit_transform([mesh])[0]
-    (entry,) = list(tmp_path.rglob("output.pkl"))
-    entry.write_bytes(b"not a pickle")
-    again = est.fit_transform([mesh])[0]
+    (entry,) = [p.parent for p in tmp_path.rglob("header.json")]
+    (entry / "values.npy").write_bytes(b"not an array")
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = est.fit_transform([mesh])[0]
     np.testing.assert_array_equal(again.values, first.values)
-    assert entry.read_bytes() != b"not a pickle"  # rewritten
+    assert (entry / "values.npy").read_bytes() != b"not an array"  # rewritten
 
 
 @pytest.mark.parametrize("scale", [1e-300, 1e-150, 1e-80, 1e80, 1e150, 1e300])

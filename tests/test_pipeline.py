@@ -62,7 +62,7 @@ def test_grid_search_over_eigen_index_solves_each_mesh_once(shapes, tmp_path):
         cv=StratifiedKFold(3),
     )
     grid.fit(meshes, y)
-    assert sum(1 for _ in tmp_path.rglob("output.pkl")) == len(meshes)
+    assert sum(1 for _ in tmp_path.rglob("header.json")) == len(meshes)
     assert grid.best_params_["laplacianeigentransformer__eigen_index"] in range(1, 6)
 
 

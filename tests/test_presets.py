@@ -129,7 +129,7 @@ def test_a_grid_over_weights_and_signature_parameters_solves_each_mesh_once(shap
         "pipeline__distance__ord1__distance__order": [1.0, 2.0],
     }
     search = GridSearchCV(model, grid, cv=StratifiedKFold(2)).fit(meshes, y)
-    assert sum(1 for _ in tmp_path.rglob("output.pkl")) == len(meshes)
+    assert sum(1 for _ in tmp_path.rglob("header.json")) == len(meshes)
     assert search.best_score_ >= 0.8
 
 

@@ -220,7 +220,7 @@ def test_the_cache_key_follows_the_mesh_content(tmp_path, good):
     assert not np.array_equal(first.values, second.values)
     again = est.fit_transform([(vertices.copy(), faces.copy())])[0]
     assert np.array_equal(first.values, again.values)
-    entries = [p for p in tmp_path.rglob("output.pkl")]
+    entries = [p for p in tmp_path.rglob("header.json")]
     assert len(entries) == 2
 
 
@@ -239,7 +239,7 @@ def test_a_failing_eigensolver_names_the_sample(good, error, monkeypatch):
     # failure is therefore injected where the solver is called, with each kind of error
     # the solvers raise (a factorization's ValueError, ARPACK's RuntimeError, a
     # numerical ArithmeticError).
-    from sklearn_meshph.spectral import transformer
+    from sklearn_meshph.spectral import solve as transformer
 
     sphere = trimesh.creation.icosphere(3)
     n_vertices, n_faces = len(sphere.vertices), len(sphere.faces)

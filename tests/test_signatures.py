@@ -151,7 +151,7 @@ def test_a_grid_over_signatures_and_scales_solves_each_mesh_once(tmp_path: Path)
     ]
     search = GridSearchCV(pipe, grid, cv=3).fit(meshes, y)
     assert len(search.cv_results_["params"]) == 9
-    assert sum(1 for _ in tmp_path.rglob("output.pkl")) == len(meshes)
+    assert sum(1 for _ in tmp_path.rglob("header.json")) == len(meshes)
 
 
 def test_too_few_eigenpairs_is_refused_clearly():

@@ -12,6 +12,7 @@
 - :mod:`.transformer`: ``LaplacianEigenTransformer`` and its per-mesh cache.
 """
 
+from .cache import CacheWarning
 from .eigensolver import laplacian_eigenfunctions
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
@@ -20,6 +21,7 @@ from .signatures import SIGNATURES
 from .transformer import LaplacianEigenTransformer, RepeatedEigenvalueWarning
 
 __all__ = [
+    "CacheWarning",
     "LAPLACIANS",
     "SIGNATURES",
     "SOLVERS",

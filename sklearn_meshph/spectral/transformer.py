@@ -4,25 +4,24 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import replace
 from numbers import Integral
 
 import numpy as np
 from joblib import delayed
 from sklearn.utils import check_random_state
-from sklearn.utils.validation import check_memory
 
 from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
 from .._progress import parallel, track
 from .._threads import one_blas_thread
-from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
+from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
-from ..mesh.validation import check_mesh, where
-from .eigensolver import generalized_eigenpairs
+from ..mesh.validation import check_mesh
+from .cache import EigenCache
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .signatures import SIGNATURES
+from .solve import mesh_eigenpairs
 
 __all__ = ["LaplacianEigenTransformer", "RepeatedEigenvalueWarning"]
 
@@ -41,76 +40,6 @@ _REPEATED_RTOL = 1e-3
 
 class RepeatedEigenvalueWarning(UserWarning):
     """The requested eigenvalue is (nearly) repeated: its eigenfunction is not unique."""
-
-
-def unit_box(vertices: np.ndarray) -> tuple[np.ndarray, float]:
-    """``vertices`` moved and scaled into ``[-1, 1]^3``, and the length ``scale`` with
-    ``vertices ~ center + scale * unit``, computed without overflow or underflow for
-    any finite float64 coordinates (halves first, then one division), so that what
-    follows (areas, cotangents, the mass matrix) sees numbers near 1 whatever the
-    mesh's scale. A mesh of one point (no extent) is returned as it is."""
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    half = vertices / 2 - (lo / 2 + hi / 2) / 2
-    extent = float(np.abs(half).max()) if len(vertices) else 0.0
-    if not 0.0 < extent < np.inf:
-        return vertices, 1.0
-    return half / extent, 2.0 * extent
-
-
-def mesh_eigenpairs(
-    vertices,
-    faces,
-    laplacian,
-    normalization,
-    components,
-    n_eigs,
-    seed,
-    index,
-    solver="auto",
-    weld=True,
-):
-    """Clean one validated mesh and solve its eigenpairs: the unit ``memory`` caches.
-
-    The cache key is the input mesh's content and the settings (``index``, the sample's
-    position, is ignored), so a hit skips the cleaning too. With
-    ``normalization="area"`` the cotangent mass matrix is divided by the total area (the
-    mesh scaled to unit area) and the graph Laplacian gets ``M = I / n``, so that
-    eigenvectors have unit mean square whatever the scale and the vertex count.
-    """
-    # Everything below works on the mesh in a unit box: the same numbers for any uniform
-    # scale float64 can represent (1e-150 or 1e150), no underflow in areas or overflow in
-    # squared lengths. The kept vertices are then taken back from the input, exactly.
-    unit, scale = unit_box(vertices)
-    clean = clean_checked(unit, faces, components=components, index=index, weld=weld)
-    points = clean.vertices  # in the unit box: for the factorization's ordering
-    L, M = LAPLACIANS[laplacian].value(points, clean.faces)
-    clean = replace(clean, vertices=np.ascontiguousarray(vertices[clean.vertex_indices]))
-    if normalization == "area":
-        M = M / M.diagonal().sum()
-    n_eigs = min(n_eigs, len(clean.vertices))
-    try:
-        values, vectors = generalized_eigenpairs(
-            L, M, n_eigs, seed=seed, points=points, solver=solver
-        )
-    except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, the factorization
-        raise ValueError(
-            f"{where(index)}: the eigensolver failed on the cleaned mesh "
-            f"({len(clean.vertices)} vertices, {len(clean.faces)} faces): {error}"
-        ) from error
-    if normalization == "none" and laplacian == "cotangent":
-        # The mass matrix of the mesh as given is scale^2 times the unit box's: the
-        # eigenvalues divide by scale^2, M-orthonormal eigenvectors by scale.
-        with np.errstate(over="ignore", under="ignore"):
-            values, vectors = values / scale / scale, vectors / scale
-        if not (np.isfinite(values).all() and np.isfinite(vectors).all()) or (
-            len(values) > 1 and values[1:].max() < np.finfo(np.float64).tiny
-        ):
-            raise ValueError(
-                f"{where(index)}: with normalization='none' the eigenpairs of this mesh "
-                f"(extent about {scale:.3g}) are beyond float64's range; use "
-                "normalization='area', which gives the same functions at any scale"
-            )
-    return clean, values, vectors
 
 
 def _size_hint(mesh) -> int:
@@ -139,25 +68,51 @@ def _block(n: int) -> int:
     return _EIGS_BLOCK * (-(-n // _EIGS_BLOCK))
 
 
+def _cache_of(memory):
+    """The eigen cache of a ``memory`` parameter: an :class:`EigenCache` in a folder (a
+    path, or the location of a ``joblib.Memory``), a caching object of the user's (one
+    with ``cache`` but no location: used as joblib's would be), or None."""
+    if memory is None:
+        return None
+    if isinstance(memory, str | os.PathLike):
+        return EigenCache(memory)
+    if hasattr(memory, "location"):  # a joblib.Memory: its folder, or no cache at all
+        return None if memory.location is None else EigenCache(memory.location)
+    return memory
+
+
+def _cached_solve(cache, vertices, faces, settings, n_eigs, seed, index):
+    arguments = (
+        settings["laplacian"],
+        settings["normalization"],
+        settings["components"],
+        n_eigs,
+        seed,
+        index,
+        settings["solver"],
+        settings["weld"],
+    )
+    if cache is None:
+        return mesh_eigenpairs(vertices, faces, *arguments)
+    if not isinstance(cache, EigenCache):  # the user's own caching object
+        return cache.cache(mesh_eigenpairs, ignore=["index"])(vertices, faces, *arguments)
+    key = cache.key(vertices, faces, {**settings, "n_eigs": n_eigs, "seed": seed})
+    found = cache.load(key, len(vertices), n_eigs)
+    if found is None:
+        found = mesh_eigenpairs(vertices, faces, *arguments)
+        cache.store(key, found)
+    return found
+
+
 def _eigen_one(mesh, index, *, indices, n_eigs, settings, seed, memory):
     """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
     the block must cover (none for signatures, which do not depend on the basis)."""
     with one_blas_thread():
         vertices, faces = check_mesh(mesh, index=index)
-        solve = memory.cache(mesh_eigenpairs, ignore=["index"])
         limit = n_eigs + _MAX_GROWTH
         while True:
-            clean, values, vectors = solve(
-                vertices,
-                faces,
-                settings["laplacian"],
-                settings["normalization"],
-                settings["components"],
-                n_eigs,
-                seed,
-                index,
-                settings["solver"],
-                settings["weld"],
+            clean, values, vectors = _cached_solve(
+                memory, vertices, faces, settings, n_eigs, seed, index
             )
             n = len(clean.vertices)
             if n_eigs >= min(n, limit) or not _reaches_end(values, indices):
@@ -229,10 +184,16 @@ class LaplacianEigenTransformer(SampleTransformer):
         diagonal) before cleaning, so that STL triangle soups and OBJ files split along
         UV seams become connected surfaces; ``False`` keeps the vertices as given. A
         mesh without coincident vertices is unchanged either way.
-    memory : str, joblib.Memory or None, default=None
-        Caches each mesh's eigensolve, keyed on the cleaned mesh's content and the
-        solver settings but not on ``eigen_index``: a grid search over indices below 6
-        solves each mesh once. Joblib caches are pickles: keep them in a trusted folder.
+    memory : str, path, joblib.Memory or None, default=None
+        A folder (or a ``joblib.Memory``, whose location is used) where each mesh's
+        eigensolve is cached, keyed on the input mesh's content, the solver settings,
+        the package version and its numerics version, not on ``eigen_index``: a grid
+        search over indices and signatures solves each mesh once. Entries are data only
+        (``.npy`` arrays and a JSON header, read without unpickling and checked before
+        use), so a shared or hostile folder cannot run code; an unusable entry is
+        recomputed with a ``CacheWarning``, and a read-only folder is used without
+        storing. Another object with a ``cache`` method is used as joblib's would be
+        (its format is its own).
     n_jobs : int, default=None
         Meshes solved in parallel. ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors. BLAS is
@@ -310,7 +271,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "normalization": [Options(("area", "none"))],
         "components": [Options(COMPONENT_POLICIES)],
         "weld": ["boolean"],
-        "memory": [None, str, HasMethods(["cache"])],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
         "random_state": ["random_state"],
         "solver": [Options(SOLVERS)],
@@ -398,7 +359,7 @@ class LaplacianEigenTransformer(SampleTransformer):
             seed = int(self.random_state)
         else:
             seed = int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
-        memory = check_memory(self.memory)
+        memory = _cache_of(self.memory)
         # Largest meshes first: workers that finish early pick up the small ones, so a
         # collection of mixed sizes keeps every worker busy to the end.
         order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))

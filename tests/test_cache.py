@@ -1,0 +1,153 @@
+"""The eigen cache stores data only: a crafted entry cannot run code, a bad one is
+recomputed, a stale one is never read, writes are atomic, and a read-only folder
+degrades to computing."""
+
+import json
+import os
+import pickle
+import stat
+
+import numpy as np
+import pytest
+from conftest import irregular_ellipsoid
+
+from sklearn_meshph import LaplacianEigenTransformer
+from sklearn_meshph.spectral import cache as cache_module
+from sklearn_meshph.spectral.cache import CacheWarning, EigenCache, numerics_digest
+
+MESH = irregular_ellipsoid(2, seed=4)
+
+#: The digest of the numerics modules at each NUMERICS_VERSION. A failure here means a
+#: module that changes the numbers of a solve was edited: bump NUMERICS_VERSION in
+#: sklearn_meshph/spectral/cache.py and record the new digest below.
+RECORDED = {1: "e46d60da681850581c2406ff48ad1e93ec6094adfeb7a09c8423a8fac8825a8f"}
+
+
+def entries(folder):
+    return sorted(p.parent for p in folder.rglob("header.json"))
+
+
+def solve(folder, **params):
+    return LaplacianEigenTransformer(memory=str(folder), random_state=0, **params).fit_transform(
+        [MESH]
+    )[0]
+
+
+def test_the_numerics_version_is_bumped_when_the_numerics_change():
+    assert numerics_digest() == RECORDED[cache_module.NUMERICS_VERSION], (
+        "a module of NUMERICS_FILES changed: bump NUMERICS_VERSION and record "
+        f"{numerics_digest()!r} for it in tests/test_cache.py"
+    )
+
+
+def test_a_bumped_numerics_version_misses(tmp_path, monkeypatch):
+    solve(tmp_path)
+    assert len(entries(tmp_path)) == 1
+    monkeypatch.setattr(cache_module, "NUMERICS_VERSION", cache_module.NUMERICS_VERSION + 1)
+    solve(tmp_path)
+    assert len(entries(tmp_path)) == 2  # a new key: the old entry is never read
+
+
+def test_a_crafted_pickle_in_the_cache_cannot_run_code(tmp_path):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    marker = tmp_path / "pwned"
+
+    class Exploit:
+        def __reduce__(self):
+            return (os.system, (f"touch {marker}",))
+
+    payload = pickle.dumps(Exploit())
+    for name in ("values.npy", "vectors.npy", "header.json"):
+        (entry / name).write_bytes(payload)
+    # An object array saved by numpy (pickled inside a valid .npy) is refused too.
+    np.save(entry / "faces.npy", np.array([Exploit()], dtype=object), allow_pickle=True)
+    with pytest.warns(CacheWarning):
+        again = solve(tmp_path)
+    assert not marker.exists()
+    np.testing.assert_array_equal(again.values, first.values)
+
+
+@pytest.mark.parametrize(
+    "damage",
+    ["wrong shape", "huge header", "nan", "foreign key", "truncated", "wrong dtype"],
+)
+def test_an_unusable_entry_is_recomputed_with_a_warning(tmp_path, damage):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    vectors = np.load(entry / "vectors.npy")
+    if damage == "wrong shape":
+        np.save(entry / "vectors.npy", vectors[:, :-1])
+    elif damage == "huge header":  # claims 10^12 elements: refused before reading
+        with open(entry / "values.npy", "wb") as stream:
+            np.lib.format.write_array_header_1_0(
+                stream, {"descr": "<f8", "fortran_order": False, "shape": (10**12,)}
+            )
+    elif damage == "nan":
+        vectors[0, 0] = np.nan
+        np.save(entry / "vectors.npy", vectors)
+    elif damage == "foreign key":
+        header = json.loads((entry / "header.json").read_text())
+        header["key"] = "0" * 64
+        (entry / "header.json").write_text(json.dumps(header))
+    elif damage == "truncated":
+        data = (entry / "vectors.npy").read_bytes()
+        (entry / "vectors.npy").write_bytes(data[: len(data) // 2])
+    else:
+        np.save(entry / "values.npy", np.load(entry / "values.npy").astype(np.float32))
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+    assert again.spectrum is not None
+    # The entry was replaced: the next run reads it without a warning.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        np.testing.assert_array_equal(solve(tmp_path).values, first.values)
+
+
+def test_hits_give_the_same_result_as_a_solve(tmp_path):
+    uncached = LaplacianEigenTransformer(random_state=0).fit_transform([MESH])[0]
+    first, second = solve(tmp_path), solve(tmp_path)
+    for field in (first, second):
+        np.testing.assert_array_equal(field.values, uncached.values)
+        np.testing.assert_array_equal(field.eigenvalues, uncached.eigenvalues)
+        assert field.cleaning == uncached.cleaning
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs POSIX, non-root")
+def test_a_read_only_folder_degrades_to_computing(tmp_path):
+    folder = tmp_path / "shared"
+    folder.mkdir()
+    folder.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    try:
+        with pytest.warns(CacheWarning, match="cannot be written"):
+            field = solve(folder)
+        assert np.isfinite(field.values).all() and not entries(folder)
+    finally:
+        folder.chmod(stat.S_IRWXU)
+
+
+def test_writes_are_atomic_and_orphans_are_swept(tmp_path):
+    cache = EigenCache(tmp_path)
+    solve(tmp_path)
+    orphan = cache.folder / ".deadbeef.1.0.tmp"
+    orphan.mkdir()
+    old = 10 * cache_module._STALE_TEMPORARY
+    os.utime(orphan, (orphan.stat().st_atime - old, orphan.stat().st_mtime - old))
+    fresh = cache.folder / ".cafe.2.0.tmp"  # a writer at work right now: kept
+    fresh.mkdir()
+    solve(tmp_path, laplacian="graph")  # another entry: its writer sweeps
+    assert not orphan.exists() and fresh.exists()
+    assert not [p for p in cache.folder.iterdir() if p.suffix == ".tmp" and p != fresh]
+
+
+def test_a_folder_that_cannot_be_made_degrades_to_computing(tmp_path):
+    # A file where the cache folder should be: writing fails for any user, root too.
+    blocked = tmp_path / "not-a-folder"
+    blocked.write_text("")
+    with pytest.warns(CacheWarning, match="cannot be written"):
+        field = solve(blocked)
+    reference = LaplacianEigenTransformer(random_state=0).fit_transform([MESH])[0]
+    np.testing.assert_array_equal(field.values, reference.values)
