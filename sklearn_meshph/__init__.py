@@ -37,6 +37,7 @@ from .pipelines import make_mesh_distance
 from .spectral import (
     CacheWarning,
     LaplacianEigenTransformer,
+    MeshQualityWarning,
     RepeatedEigenvalueWarning,
     ShapeDNA,
     cotangent_laplacian,
@@ -77,6 +78,7 @@ __all__ = [
     "LaplacianEigenTransformer",
     "LowerStarPersistence",
     "MeshCleaningWarning",
+    "MeshQualityWarning",
     "RepeatedEigenvalueWarning",
     "ScalarField",
     "ShapeDNA",

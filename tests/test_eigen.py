@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from sklearn_meshph import LaplacianEigenTransformer, RepeatedEigenvalueWarning, ScalarField
 from sklearn_meshph.spectral.cache import CacheWarning
+from sklearn_meshph.spectral.transformer import MeshQualityWarning
 
 
 def bumpy(subdivisions=3):
@@ -228,3 +229,23 @@ def test_the_same_functions_at_any_scale_float64_can_represent(scale):
     else:
         with pytest.raises(ValueError, match="sample 0: with normalization='none'.*beyond"):
             plain.fit_transform([moved])
+
+
+def needle_strip(n=40, height=1e-9):
+    """A strip of triangles of height ``height`` between two rows of points: every
+    triangle a needle, none degenerate enough to be dropped by cleaning."""
+    top = np.c_[np.arange(n), np.zeros(n), np.zeros(n)]
+    bottom = np.c_[np.arange(n) + 0.5, np.full(n, height), np.zeros(n)]
+    faces = []
+    for i in range(n - 1):
+        faces += [[i, n + i, i + 1], [i + 1, n + i, n + i + 1]]
+    return np.vstack([top, bottom]), np.array(faces)
+
+
+def test_a_mesh_of_needles_warns_that_its_spectrum_means_little():
+    with pytest.warns(MeshQualityWarning, match=r"sample 1: 100% of the triangles are needles"):
+        LaplacianEigenTransformer(random_state=0).fit_transform([bumpy(), needle_strip()])
+    # A well-shaped mesh, and the same strip made taller, do not warn.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshQualityWarning)
+        LaplacianEigenTransformer(random_state=0).fit_transform([bumpy(), needle_strip(height=0.5)])

@@ -18,7 +18,11 @@ from .factorization import SOLVERS
 from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
 from .shape_dna import ShapeDNA
 from .signatures import SIGNATURES
-from .transformer import LaplacianEigenTransformer, RepeatedEigenvalueWarning
+from .transformer import (
+    LaplacianEigenTransformer,
+    MeshQualityWarning,
+    RepeatedEigenvalueWarning,
+)
 
 __all__ = [
     "CacheWarning",
@@ -26,6 +30,7 @@ __all__ = [
     "SIGNATURES",
     "SOLVERS",
     "LaplacianEigenTransformer",
+    "MeshQualityWarning",
     "RepeatedEigenvalueWarning",
     "ShapeDNA",
     "cotangent_laplacian",

@@ -21,9 +21,9 @@ from .cache import EigenCache
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .signatures import SIGNATURES
-from .solve import mesh_eigenpairs
+from .solve import mesh_eigenpairs, unit_box
 
-__all__ = ["LaplacianEigenTransformer", "RepeatedEigenvalueWarning"]
+__all__ = ["LaplacianEigenTransformer", "MeshQualityWarning", "RepeatedEigenvalueWarning"]
 
 # Eigenpairs are solved in blocks of this many, whatever the requested index, so that a
 # grid search over small indices reuses one cached solve per mesh.
@@ -40,6 +40,51 @@ _REPEATED_RTOL = 1e-3
 
 class RepeatedEigenvalueWarning(UserWarning):
     """The requested eigenvalue is (nearly) repeated: its eigenfunction is not unique."""
+
+
+class MeshQualityWarning(UserWarning):
+    """Most triangles of a mesh are needles: its Laplacian, hence its eigenpairs, mean
+    little."""
+
+
+# A triangle whose smallest angle has a sine below this is a needle: its cotangent
+# weight is above 1e6, and a mesh made mostly of them has a meaningless spectrum.
+NEEDLE_SINE = 1e-6
+# The share of needle triangles from which a mesh is warned about.
+NEEDLE_SHARE = 0.5
+
+
+def needle_share(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The share of triangles whose smallest angle has a sine below ``NEEDLE_SINE``
+    (computed in a unit box, so at any scale)."""
+    unit = unit_box(np.asarray(vertices, dtype=np.float64))[0]
+    a, b, c = (unit[faces[:, k]] for k in range(3))
+    lengths = np.stack(
+        [
+            np.linalg.norm(b - c, axis=1),
+            np.linalg.norm(c - a, axis=1),
+            np.linalg.norm(a - b, axis=1),
+        ]
+    )
+    double_area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    # sin(angle at a corner) = 2 area / (product of its two edges): the smallest angle
+    # is at the corner whose two edges have the largest product.
+    products = np.stack([lengths[1] * lengths[2], lengths[2] * lengths[0], lengths[0] * lengths[1]])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sines = double_area / products.max(axis=0)
+    return float(np.mean(~(sines >= NEEDLE_SINE))) if len(faces) else 0.0
+
+
+def _warn_if_needles(clean, sample: int, stacklevel: int) -> None:
+    share = needle_share(clean.vertices, clean.faces)
+    if share > NEEDLE_SHARE:
+        warnings.warn(
+            f"sample {sample}: {100 * share:.3g}% of the triangles are needles (an angle "
+            f"with sine below {NEEDLE_SINE:g}); the Laplacian of such a mesh is "
+            "ill-conditioned and its eigenpairs mean little: remesh it",
+            MeshQualityWarning,
+            stacklevel=stacklevel + 1,
+        )
 
 
 def _size_hint(mesh) -> int:
@@ -400,6 +445,7 @@ class LaplacianEigenTransformer(SampleTransformer):
             report = clean.report
             # First: a mesh reduced to a few vertices is explained before it is refused.
             warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
+            _warn_if_needles(clean, i, stacklevel=3)
             if signature is not None:
                 if len(values) < 2:
                     raise ValueError(f"sample {i}: the cleaned mesh has too few vertices")
