@@ -10,18 +10,14 @@ caching object (pickles, today's format before this cache). Loading is excluded.
 from __future__ import annotations
 
 import argparse
-import os
 import tempfile
 import time
 from pathlib import Path
 
 import joblib
+from _common import DATA
 
 from sklearn_meshph import LaplacianEigenTransformer, load_mesh_folder
-
-DATA = Path(
-    os.environ.get("SKLEARN_MESHPH_DATA", Path(__file__).parents[1] / ".." / "shared" / "data")
-)
 
 
 class PickleCache:

@@ -80,29 +80,22 @@ takes 6.6 ms.
 from __future__ import annotations
 
 import argparse
-import os
 import time
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
+from _common import DATA, collection, cv_1nn, loo_1nn
 from joblib import Parallel, delayed
 from scipy.sparse.csgraph import dijkstra
-from sklearn.model_selection import RepeatedStratifiedKFold
 
 from sklearn_meshph import (
     check_mesh,
     clean_mesh,
-    load_mesh_folder,
-    make_shapes,
     pairwise_diagram_distances,
 )
 
 N_SAMPLES = 400
-
-DATA = Path(
-    os.environ.get("SKLEARN_MESHPH_DATA", Path(__file__).parents[1] / ".." / "shared" / "data")
-)
 
 STAGES = ("cleaning", "sampling+geodesics", "rips", "bottleneck")
 
@@ -317,36 +310,6 @@ def gh_distance_matrices(meshes, n_samples=N_SAMPLES, n_jobs=2, seed=None):
         "n_vertices": np.array([r["n_vertices"] for r in results]),
         "kept": np.array([r["kept"] for r in results]),
     }
-
-
-def loo_1nn(matrix, y):
-    """Leave-one-out 1-NN accuracy of a full distance matrix (ties: lowest index)."""
-    matrix = np.array(matrix, dtype=float)
-    np.fill_diagonal(matrix, np.inf)
-    return float(np.mean(y[np.argmin(matrix, axis=1)] == y))
-
-
-def cv_1nn(matrix, y, repeats=10):
-    """Mean 1-NN accuracy over ``repeats`` x repeated stratified 5-fold splits."""
-    matrix = np.asarray(matrix, dtype=float)
-    n_splits = min(5, int(np.bincount(y).min()))
-    splits = RepeatedStratifiedKFold(n_splits=n_splits, n_repeats=repeats, random_state=0)
-    scores = [
-        np.mean(y[train][np.argmin(matrix[np.ix_(test, train)], axis=1)] == y[test])
-        for train, test in splits.split(np.zeros(len(y)), y)
-    ]
-    return float(np.mean(scores))
-
-
-def collection(name, n_jobs):
-    """``(meshes, y, target_names)`` of a collection, or None if its folder is missing."""
-    if name == "shapes":
-        data = make_shapes(n_per_class=10, random_state=0)
-    elif (DATA / name).is_dir():
-        data = load_mesh_folder(DATA / name, n_jobs=n_jobs)
-    else:
-        return None
-    return list(data.data), np.asarray(data.target), list(data.target_names)
 
 
 def main():

@@ -18,20 +18,18 @@ cross-validation (unless ``--no-models``).
 from __future__ import annotations
 
 import argparse
-import os
 import resource
 import tempfile
 import time
 import tracemalloc
 import warnings
-from pathlib import Path
 
 import joblib
 import numpy as np
+from _common import DATA, collection, cv_1nn, folds, loo_1nn
 from sklearn.base import clone
 from sklearn.model_selection import (
     GridSearchCV,
-    RepeatedStratifiedKFold,
     StratifiedKFold,
     cross_val_score,
 )
@@ -43,16 +41,10 @@ from sklearn_meshph import (
     LaplacianEigenTransformer,
     LowerStarPersistence,
     ShapeDNA,
-    load_mesh_folder,
     make_mesh_distance,
-    make_shapes,
 )
 from sklearn_meshph.mesh import check_mesh
 from sklearn_meshph.spectral.solve import mesh_eigenpairs
-
-DATA = Path(
-    os.environ.get("SKLEARN_MESHPH_DATA", Path(__file__).parents[1] / ".." / "shared" / "data")
-)
 
 
 def split(pipeline):
@@ -116,30 +108,6 @@ def configurations(memory, n_jobs):
         "default without Shape-DNA": split(without_dna),
         "default without essential H1": split(without_ext1),
     }
-
-
-def loo_1nn(matrix, y):
-    """Leave-one-out 1-NN accuracy of a full distance matrix (ties: lowest index)."""
-    matrix = np.array(matrix, dtype=float)
-    np.fill_diagonal(matrix, np.inf)
-    return float(np.mean(y[np.argmin(matrix, axis=1)] == y))
-
-
-def folds(y, repeats=10):
-    n_splits = min(5, int(np.bincount(y).min()))
-    return RepeatedStratifiedKFold(n_splits=n_splits, n_repeats=repeats, random_state=0).split(
-        np.zeros(len(y)), y
-    )
-
-
-def cv_1nn(matrix, y):
-    """Mean 1-NN accuracy over 10 x repeated stratified 5-fold splits of a full matrix."""
-    matrix = np.asarray(matrix, dtype=float)
-    scores = [
-        np.mean(y[train][np.argmin(matrix[np.ix_(test, train)], axis=1)] == y[test])
-        for train, test in folds(y)
-    ]
-    return float(np.mean(scores))
 
 
 def median_scale(block):
@@ -276,14 +244,6 @@ def gh_comparator(meshes, y, n_jobs, results, name):
     print(f"  ({N_SAMPLES} farthest-point samples per mesh, {backend[0]} {backend[1]})")
 
 
-def collection(name, n_jobs):
-    if name == "shapes":
-        data = make_shapes(n_per_class=10, random_state=0)
-        return list(data.data), np.asarray(data.target)
-    data = load_mesh_folder(DATA / name, n_jobs=n_jobs)
-    return list(data.data), np.asarray(data.target)
-
-
 def solve_memory(mesh, n_eigs):
     """Peak traced memory (MB) of one mesh's cleaning and eigensolve of n_eigs pairs."""
     vertices, faces = check_mesh(mesh)
@@ -318,11 +278,12 @@ def main():
 def run(args, memory):
     results, loading, n_meshes = {}, {}, {}
     for name in args.collections:
-        if name != "shapes" and not (DATA / name).is_dir():
+        start = time.perf_counter()
+        loaded = collection(name, args.n_jobs)
+        if loaded is None:
             print(f"skipping {name}: not found in {DATA}")
             continue
-        start = time.perf_counter()
-        meshes, y = collection(name, args.n_jobs)
+        meshes, y, _ = loaded
         loading[name] = time.perf_counter() - start
         for config, (stage, distances) in configurations(memory, args.n_jobs).items():
             start = time.perf_counter()

@@ -28,12 +28,8 @@ import numpy as np  # noqa: E402
 from sklearn.manifold import TSNE  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
-from gh_signatures import (  # noqa: E402
-    DATA,
-    N_SAMPLES,
-    gh_distance_matrices,
-    loo_1nn,
-)
+from _common import DATA, loo_1nn  # noqa: E402
+from gh_signatures import N_SAMPLES, gh_distance_matrices  # noqa: E402
 
 from sklearn_meshph import load_mesh_folder, make_mesh_distance  # noqa: E402
 

@@ -12,14 +12,12 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer, as_sample_list
 from .._param_validation import Options
 from .._progress import parallel
-from ..diagrams.validation import check_samples
 
 __all__ = [
     "COMMON_CONSTRAINTS",
     "ESSENTIAL_POLICIES",
     "DiagramTransformer",
     "chunks",
-    "finite_parts",
 ]
 
 ESSENTIAL_POLICIES = ("drop", "clip", "error")
@@ -35,32 +33,6 @@ COMMON_CONSTRAINTS: dict = {
 _CHUNK = 2048
 
 
-def finite_parts(samples, policy: str, clip_values=None) -> list[tuple[np.ndarray, ...]]:
-    """Samples with their essential points (death ``inf``) dropped, clipped at the
-    fitted value of their position (``clip_values[k]``) or refused."""
-    out = []
-    for i, sample in enumerate(samples):
-        parts = []
-        for k, diagram in enumerate(sample):
-            infinite = ~np.isfinite(diagram[:, 1])
-            if infinite.any():
-                if policy == "error":
-                    row = int(np.flatnonzero(infinite)[0])
-                    raise ValueError(
-                        f"sample {i}, diagram {k}: row {row} is an essential point (death "
-                        "inf); set essential='drop' or 'clip', or drop them upstream "
-                        "(LowerStarPersistence(essential='drop' or 'max'))"
-                    )
-                if policy == "drop":
-                    diagram = diagram[~infinite]
-                else:
-                    diagram = diagram.copy()
-                    diagram[infinite, 1] = np.maximum(clip_values[k], diagram[infinite, 0])
-            parts.append(diagram)
-        out.append(tuple(parts))
-    return out
-
-
 def chunks(n: int, n_jobs) -> list[tuple[int, int]]:
     """Consecutive ``(start, stop)`` blocks of samples: a few per worker, each at most
     ``_CHUNK`` samples."""
@@ -73,35 +45,39 @@ class DiagramTransformer(SampleTransformer):
     """Base of the transformers whose samples are persistence diagrams (one ``(n, 2)``
     array or a tuple of them, as :class:`LowerStarPersistence` returns).
 
-    ``_fit_samples(X)`` validates the samples and applies the ``essential`` policy
-    (learning, for ``"clip"``, the largest finite death of each position), returning each
-    sample as a tuple of finite diagrams; ``_checked_parts(X)`` does the same at transform
-    time with the fitted values. The kernels build on it; the vectorizers on
-    :class:`PackedVectorizer`, which does the same on one packed array.
+    ``_fit_packed(X)`` validates the samples and applies the ``essential`` policy
+    (learning, for ``"clip"``, the largest finite death of each position);
+    ``_checked_packed(X)`` does the same at transform time with the fitted values. Both
+    return a :class:`Packed` collection (``.samples()`` gives tuples of diagrams).
     """
 
     _sample_kind = "diagrams"
     _requires_fit = True
 
-    def _fit_samples(self, X):
-        """Validate and store what every vectorizer learns; returns the finite parts."""
+    def _fit_packed(self, X) -> Packed:
+        """Validate ``X``, learn the clipping value of each position (its largest
+        finite death) and apply the ``essential`` policy."""
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
-        super().fit(X)
-        samples = check_samples(X)
-        self.n_diagrams_ = len(samples[0])
-        deaths = [
-            np.concatenate([s[k][:, 1] for s in samples] + [np.empty(0)])
-            for k in range(self.n_diagrams_)
-        ]
+        SampleTransformer.fit(self, X)
+        packed = pack_samples(X)
+        self.n_diagrams_ = packed.n_diagrams
+        finite = np.isfinite(packed.points[:, 1])
+        position = packed.diagram_of_rows() % packed.n_diagrams
         self.clip_values_ = np.array(
-            [d[np.isfinite(d)].max() if np.isfinite(d).any() else 0.0 for d in deaths]
+            [
+                packed.points[finite & (position == k), 1].max()
+                if (finite & (position == k)).any()
+                else 0.0
+                for k in range(packed.n_diagrams)
+            ]
         )
-        return finite_parts(samples, self.essential, self.clip_values_)
+        return apply_essential(packed, self.essential, self.clip_values_)
 
-    def _checked_parts(self, X):
+    def _checked_packed(self, X) -> Packed:
+        """Validate ``X`` against the fitted data and apply the ``essential`` policy."""
         check_is_fitted(self, "n_diagrams_")
-        samples = check_samples(X, n_diagrams=self.n_diagrams_)
-        return finite_parts(samples, self.essential, self.clip_values_)
+        packed = pack_samples(X, n_diagrams=self.n_diagrams_)
+        return apply_essential(packed, self.essential, self.clip_values_)
 
 
 # The packed path of the vectorizers -------------------------------------------------
@@ -139,6 +115,14 @@ class Packed:
         starts = self.offsets[k : len(self.offsets) - 1 : self.n_diagrams]
         stops = self.offsets[k + 1 :: self.n_diagrams]
         return np.ascontiguousarray(starts), np.ascontiguousarray(stops)
+
+    def samples(self) -> list[tuple[np.ndarray, ...]]:
+        """Each sample as a tuple of its diagrams (views of ``points``)."""
+        k, o, p = self.n_diagrams, self.offsets, self.points
+        return [
+            tuple(p[o[i * k + j] : o[i * k + j + 1]] for j in range(k))
+            for i in range(self.n_samples)
+        ]
 
     def rows_of_position(self, k: int) -> np.ndarray:
         starts, stops = self.position(k)
@@ -198,7 +182,7 @@ def pack_samples(X, n_diagrams: int | None = None) -> Packed:
 
 def apply_essential(packed: Packed, policy: str, clip_values=None) -> Packed:
     """``packed`` with its essential points dropped, clipped at ``clip_values`` (per
-    position) or refused, as :func:`finite_parts` does for lists."""
+    position) or refused."""
     infinite = np.isinf(packed.points[:, 1])
     if not infinite.any():
         return packed
@@ -228,25 +212,6 @@ class PackedVectorizer(DiagramTransformer):
     per position, ``_compute(k, points, starts, stops)`` gives the block of columns of
     position ``k`` for the diagrams ``starts:stops`` of ``points``."""
 
-    def _fit_packed(self, X) -> Packed:
-        X = as_sample_list(X, "diagrams")  # read once: X may be a generator
-        SampleTransformer.fit(self, X)
-        packed = pack_samples(X)
-        self.n_diagrams_ = packed.n_diagrams
-        finite = np.isfinite(packed.points[:, 1])
-        position = packed.diagram_of_rows() % packed.n_diagrams
-        self.clip_values_ = np.array(
-            [
-                packed.points[finite & (position == k), 1].max()
-                if (finite & (position == k)).any()
-                else 0.0
-                for k in range(packed.n_diagrams)
-            ]
-        )
-        packed = apply_essential(packed, self.essential, self.clip_values_)
-        self._fit_positions(packed)
-        return packed
-
     def fit(self, X, y=None):
         """Learn what the vectorization needs from the diagrams of each position.
 
@@ -259,7 +224,7 @@ class PackedVectorizer(DiagramTransformer):
         -------
         self
         """
-        self._fit_packed(X)
+        self._fit_positions(self._fit_packed(X))
         return self
 
     def transform(self, X):
@@ -274,9 +239,7 @@ class PackedVectorizer(DiagramTransformer):
         -------
         ndarray of shape (n_samples, n_features)
         """
-        check_is_fitted(self, "n_diagrams_")
-        packed = pack_samples(X, n_diagrams=self.n_diagrams_)
-        return self._rows(apply_essential(packed, self.essential, self.clip_values_))
+        return self._rows(self._checked_packed(X))
 
     def fit_transform(self, X, y=None):
         """Fit and transform ``X``, validating it once.
@@ -290,7 +253,9 @@ class PackedVectorizer(DiagramTransformer):
         -------
         ndarray of shape (n_samples, n_features)
         """
-        return self._rows(self._fit_packed(X))
+        packed = self._fit_packed(X)
+        self._fit_positions(packed)
+        return self._rows(packed)
 
     def _rows(self, packed: Packed) -> np.ndarray:
         n_jobs = getattr(self, "n_jobs", None)

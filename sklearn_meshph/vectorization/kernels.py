@@ -52,7 +52,7 @@ class _DiagramKernel(DiagramTransformer):
         -------
         self
         """
-        self.diagrams_ = self._fit_samples(X)
+        self.diagrams_ = self._fit_packed(X).samples()
         return self
 
     def transform(self, X):
@@ -66,7 +66,7 @@ class _DiagramKernel(DiagramTransformer):
         -------
         ndarray of shape (len(X), n_fitted)
         """
-        return self._matrix(self._checked_parts(X), self.diagrams_)
+        return self._matrix(self._checked_packed(X).samples(), self.diagrams_)
 
     def fit_transform(self, X, y=None):
         """Fit, and return the symmetric kernel matrix, each pair computed once.
