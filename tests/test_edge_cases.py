@@ -482,23 +482,30 @@ def test_wasserstein_is_optimal_far_below_the_largest_persistence(a, b, bottlene
         assert got == pytest.approx(expected, rel=1e-12, abs=1e-300), order
 
 
-def _distance(a, b, order):
+def _distance(a, b, order, internal_p=np.inf):
     if order == "bottleneck":
         return bottleneck_distance(a, b)
-    return wasserstein_distance(a, b, order=order)
+    return wasserstein_distance(a, b, order=order, internal_p=internal_p)
 
 
-@pytest.mark.parametrize("order", [1.0, 2.0, 3.5, "bottleneck"])
-@pytest.mark.parametrize("scale", [1e-200, 1e200])
+@pytest.mark.parametrize(
+    ("order", "internal_p"),
+    [(1.0, np.inf), (2.0, np.inf), (3.5, np.inf), (2.0, 2.0), (1.0, 1000.0), (7.0, 1000.0)]
+    + [("bottleneck", np.inf)],
+)
+@pytest.mark.parametrize("scale", [1e-300, 1e-200, 1e200, 1e300])
 @_isolated
-def test_distances_scale_with_tiny_and_huge_diagrams(order, scale):
+def test_distances_scale_with_tiny_and_huge_diagrams(order, internal_p, scale):
+    """Every coordinate float64 holds, any order and internal_p: d(s a, s b) = s d(a, b)
+    (the diagrams of 1e300 have persistence near float64's largest value)."""
     rng = np.random.default_rng(11)
     pairs = [tuple(map(np.asarray, _SMALL))]
     pairs += [(_random_diagram(rng, 9), _random_diagram(rng, 6)) for _ in range(5)]
     for a, b in pairs:
-        expected = scale * _distance(a, b, order)
+        expected = scale * _distance(a, b, order, internal_p)
         assert expected > 0 and math.isfinite(expected)
-        assert _distance(scale * a, scale * b, order) == pytest.approx(expected, rel=1e-12, abs=0)
+        got = _distance(scale * a, scale * b, order, internal_p)
+        assert got == pytest.approx(expected, rel=1e-12, abs=0)
 
 
 @pytest.mark.parametrize("order", [1.0, 2.0, 3.5])
