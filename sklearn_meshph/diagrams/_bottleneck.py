@@ -11,6 +11,7 @@ import numba
 import numpy as np
 
 from ._assignment import DIAGONAL, augment
+from ._kdtree import STACK, build, nearest, within
 
 
 @numba.njit(cache=True)
@@ -99,85 +100,64 @@ def _max_matching(adj_ptr, adj, n_left, n_right):
 
 
 @numba.njit(cache=True)
-def _band(births, centre, reach):
-    """Positions in sorted ``births`` within ``reach`` of ``centre`` (a superset: the
-    bounds are widened by a few ulps, callers test the exact distance)."""
-    slack = 1e-12 * (abs(centre) + reach) + 1e-300
-    lo = np.searchsorted(births, centre - reach - slack, side="left")
-    hi = np.searchsorted(births, centre + reach + slack, side="right")
-    return lo, hi
-
-
-@numba.njit(cache=True)
-def _threshold_graph(a, b, by_birth, births, rows, t):
-    """CSR graph from ``a[rows]`` to the points of ``b`` within L-infinity ``t``.
-
-    ``by_birth`` sorts ``b`` by birth and ``births`` are those births: each row only
-    looks at the band of births within ``t`` of its own (geometric pruning).
-    """
+def _threshold_graph(a, b, tree_b, rows, t):
+    """CSR graph from ``a[rows]`` to the points of ``b`` within L-infinity ``t``, found
+    through the 2-d tree of ``b`` (ties and clusters cost nothing more)."""
     ptr = np.zeros(len(rows) + 1, np.int64)
     capacity = 4 * len(rows) + 16
     adj = np.empty(capacity, np.int64)
+    near = np.empty(len(b), np.int64)
+    stack = np.empty(STACK, np.int64)
     k = 0
     for r in range(len(rows)):
         i = rows[r]
-        lo, hi = _band(births, a[i, 0], t)
-        if k + hi - lo > capacity:
-            capacity = max(2 * capacity, k + hi - lo)
+        found = within(tree_b, b, a[i, 0], a[i, 1], t, near, stack)
+        if k + found > capacity:
+            capacity = max(2 * capacity, k + found)
             grown = np.empty(capacity, np.int64)
             grown[:k] = adj[:k]
             adj = grown
-        for s in range(lo, hi):
-            j = by_birth[s]
-            if max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1])) <= t:
-                adj[k] = j
-                k += 1
+        adj[k : k + found] = near[:found]
+        k += found
         ptr[r + 1] = k
     return ptr, adj[:k]
 
 
 @numba.njit(cache=True)
-def _covers(a, b, by_birth, births, t):
+def _covers(a, b, tree_b, t):
     """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
     matched into ``b`` with L-infinity cost at most ``t``."""
-    n_rows = 0
-    for i in range(len(a)):
-        if (a[i, 1] - a[i, 0]) / 2.0 > t:
-            n_rows += 1
-    if n_rows == 0:
+    rows = np.flatnonzero((a[:, 1] - a[:, 0]) / 2.0 > t)
+    if len(rows) == 0:
         return True
-    if n_rows > len(b):
+    if len(rows) > len(b):
         return False
-    rows = np.empty(n_rows, np.int64)
-    n_rows = 0
-    for i in range(len(a)):
-        if (a[i, 1] - a[i, 0]) / 2.0 > t:
-            rows[n_rows] = i
-            n_rows += 1
-    ptr, adj = _threshold_graph(a, b, by_birth, births, rows, t)
-    return _max_matching(ptr, adj, n_rows, len(b))[0] == n_rows
+    ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
+    return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
 
 
 @numba.njit(cache=True)
-def _feasible(a, b, sorted_a, sorted_b, t):
+def _feasible(a, b, tree_a, tree_b, t):
     """Whether some matching moves no point by more than ``t`` (L-infinity).
 
     Mendelsohn-Dulmage: a matching covering the points of ``a`` that cannot go to the
     diagonal and one covering those of ``b`` imply one covering both.
     """
-    return _covers(a, b, sorted_b[0], sorted_b[1], t) and _covers(b, a, sorted_a[0], sorted_a[1], t)
+    return _covers(a, b, tree_b, t) and _covers(b, a, tree_a, t)
 
 
 @numba.njit(cache=True)
-def _pair_values(a, b, by_birth, births, lo, hi, stride, out):
-    """Count the pairwise distances d with ``lo < d < hi``; store every ``stride``-th in
-    ``out`` (enumeration order) when ``stride > 0``."""
+def _pair_values(a, b, tree_b, lo, hi, stride, out):
+    """Count the pairwise distances d with ``lo < d < hi``; store every ``stride``-th
+    in ``out`` (enumeration order) when ``stride > 0``."""
+    near = np.empty(len(b), np.int64)
+    stack = np.empty(STACK, np.int64)
     count = 0
     stored = 0
     for i in range(len(a)):
-        first, last = _band(births, a[i, 0], hi)
-        for s in range(first, last):
-            j = by_birth[s]
+        found = within(tree_b, b, a[i, 0], a[i, 1], hi, near, stack)
+        for s in range(found):
+            j = near[s]
             d = max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]))
             if lo < d < hi:
                 if stride > 0 and count % stride == 0 and stored < len(out):
@@ -188,35 +168,27 @@ def _pair_values(a, b, by_birth, births, lo, hi, stride, out):
 
 
 @numba.njit(cache=True)
-def _search(a, b, sorted_a, sorted_b, values, lo, hi, gallop):
-    """Narrow the bracket (lo infeasible, hi feasible) to neighbours among ``values``.
-
-    With ``gallop``, thresholds just above ``lo`` are tried first at exponentially
-    growing steps (the answer is usually a few candidates above the lower bound), then
-    the last gap is bisected.
-    """
-    values = np.unique(values)
-    left = np.searchsorted(values, lo, side="right")
-    right = np.searchsorted(values, hi, side="left")  # values[left:right] are inside
+def _first_feasible(a, b, tree_a, tree_b, values):
+    """The smallest of the sorted ``values`` that is feasible, the last one being so:
+    thresholds just above the bracket's start are tried first at exponentially growing
+    steps (the answer is usually among the first candidates), then the gap is bisected,
+    so the matching tests stay on sparse graphs."""
+    left, right = 0, len(values) - 1  # values[right] is feasible
     step = 1
-    while gallop and left < right:
+    while left < right:
         probe = min(left + step - 1, right - 1)
-        if _feasible(a, b, sorted_a, sorted_b, values[probe]):
-            hi = values[probe]
+        if _feasible(a, b, tree_a, tree_b, values[probe]):
             right = probe
             break
-        lo = values[probe]
         left = probe + 1
         step *= 2
     while left < right:
-        mid = (left + right) // 2
-        if _feasible(a, b, sorted_a, sorted_b, values[mid]):
-            hi = values[mid]
-            right = mid
+        middle = (left + right) // 2
+        if _feasible(a, b, tree_a, tree_b, values[middle]):
+            right = middle
         else:
-            lo = values[mid]
-            left = mid + 1
-    return lo, hi
+            left = middle + 1
+    return values[right]
 
 
 _SAMPLE = 256
@@ -224,16 +196,17 @@ _COLLECT = 1 << 15
 
 
 @numba.njit(cache=True)
-def _lower_bound(a, b, by_birth, births):
+def _lower_bound(a, b, tree_b):
     """max over the points of ``a`` of the cheapest move (to ``b`` or the diagonal):
     no threshold below it is feasible, and it is a candidate value itself."""
+    best_g = np.empty(1)
+    best_j = np.empty(1, np.int64)
+    stack = np.empty(STACK, np.int64)
     bound = 0.0
     for i in range(len(a)):
         best = (a[i, 1] - a[i, 0]) / 2.0
-        first, last = _band(births, a[i, 0], best)
-        for s in range(first, last):
-            j = by_birth[s]
-            best = min(best, max(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1])))
+        if nearest(tree_b, b, a[i, 0], a[i, 1], 1, np.inf, best_g, best_j, stack):
+            best = min(best, best_g[0])
         bound = max(bound, best)
     return bound
 
@@ -330,39 +303,67 @@ def _threshold_bottleneck(a, b):
 
     The distance is one of the candidate values: 0, a half-persistence (point to the
     diagonal) or a pairwise L-infinity distance, and at least the largest cheapest move
-    of a single point, which is often the answer and is tried first. Otherwise a binary
-    search over the n + m diagonal candidates brackets it, and the pairwise candidates
-    inside the bracket are narrowed by deterministic strided samples until few enough
-    remain to sort, so memory stays O(n + m + 32k) instead of the n * m of a full
-    candidate list. Every test of a threshold is a Hopcroft-Karp matching on the pairs
-    within it, found through a band of births (geometric pruning).
+    of a single point, which is often the answer and is tried first. Otherwise the
+    thresholds ``lo * 2^(2^k)`` bracket it from below, the bracket is halved in log
+    scale until its ends are within a factor of two, and the candidates inside it are
+    narrowed by deterministic strided samples until few enough remain to sort. Every
+    test of a threshold is a Hopcroft-Karp matching on the pairs within it, found
+    through 2-d trees, so the tests stay on graphs about as sparse as the answer's, and
+    memory stays O(n + m + 32k) plus those graphs however the points tie or cluster.
     """
-    n, m = len(a), len(b)
-    order_a = np.argsort(a[:, 0], kind="mergesort")
-    order_b = np.argsort(b[:, 0], kind="mergesort")
-    sorted_a = (order_a, a[order_a, 0].copy())
-    sorted_b = (order_b, b[order_b, 0].copy())
-    lo = max(_lower_bound(a, b, *sorted_b), _lower_bound(b, a, *sorted_a))
-    if _feasible(a, b, sorted_a, sorted_b, lo):
+    tree_a, tree_b = build(a), build(b)
+    lo = max(_lower_bound(a, b, tree_b), _lower_bound(b, a, tree_a))
+    if _feasible(a, b, tree_a, tree_b, lo):
         return lo
-    diagonal = np.empty(n + m)
-    diagonal[:n] = (a[:, 1] - a[:, 0]) / 2.0
-    diagonal[n:] = (b[:, 1] - b[:, 0]) / 2.0
     # Sending everything to the diagonal is feasible at the largest half-persistence.
-    hi = diagonal.max()
-    count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
-    if count > _COLLECT:
-        lo, hi = _search(a, b, sorted_a, sorted_b, diagonal, lo, hi, False)
-        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
-    sample = np.empty(_SAMPLE)
+    hi = max(np.max((a[:, 1] - a[:, 0]) / 2.0), np.max((b[:, 1] - b[:, 0]) / 2.0))
+    # A feasible threshold within a factor 2 of an infeasible one, in O(log log) tests.
+    if lo == 0.0:  # every point has a copy across or lies on the diagonal
+        start = hi * 2.0**-60
+        if _feasible(a, b, tree_a, tree_b, start):
+            hi = start
+        else:
+            lo = start
+    if lo > 0.0:
+        power = 1.0
+        while lo * 2.0**power < hi:
+            probe = lo * 2.0**power
+            if _feasible(a, b, tree_a, tree_b, probe):
+                hi = probe
+                break
+            lo = probe
+            power *= 2.0
+        while hi > 2.0 * lo:
+            probe = np.sqrt(lo) * np.sqrt(hi)
+            if _feasible(a, b, tree_a, tree_b, probe):
+                hi = probe
+            else:
+                lo = probe
+    # The answer is the smallest feasible candidate in (lo, hi]: hi itself, or one of
+    # the candidates strictly below it. Strided samples of those narrow the bracket
+    # until few remain; excluding hi keeps ties (integer-valued diagrams, where many
+    # pairs share each distance) from stalling the narrowing.
+    diagonal = np.empty(len(a) + len(b))
+    diagonal[: len(a)] = (a[:, 1] - a[:, 0]) / 2.0
+    diagonal[len(a) :] = (b[:, 1] - b[:, 0]) / 2.0
+    count = _pair_values(a, b, tree_b, lo, hi, 0, diagonal[:0])
+    sample = np.empty(_SAMPLE + 1)
     while count > _COLLECT:
-        _pair_values(a, b, order_b, sorted_b[1], lo, hi, count // _SAMPLE, sample)
-        lo, hi = _search(a, b, sorted_a, sorted_b, sample, lo, hi, False)
-        count = _pair_values(a, b, order_b, sorted_b[1], lo, hi, 0, diagonal[:0])
-    values = np.empty(count + n + m)
-    _pair_values(a, b, order_b, sorted_b[1], lo, hi, 1, values)
-    values[count:] = diagonal
-    return _search(a, b, sorted_a, sorted_b, values, lo, hi, True)[1]
+        _pair_values(a, b, tree_b, lo, hi, count // _SAMPLE, sample)
+        sample[_SAMPLE] = hi
+        values = np.unique(sample)
+        found = _first_feasible(a, b, tree_a, tree_b, values)
+        below = np.searchsorted(values, found) - 1
+        if below >= 0:
+            lo = values[below]
+        hi = found
+        count = _pair_values(a, b, tree_b, lo, hi, 0, diagonal[:0])
+    diagonal = diagonal[(diagonal > lo) & (diagonal < hi)]
+    values = np.empty(count + len(diagonal) + 1)
+    _pair_values(a, b, tree_b, lo, hi, 1, values)
+    values[count : count + len(diagonal)] = diagonal
+    values[-1] = hi
+    return _first_feasible(a, b, tree_a, tree_b, np.unique(values))
 
 
 @numba.njit(cache=True)
@@ -379,10 +380,7 @@ def bottleneck_partners(a, b, t):
     n, m = len(a), len(b)
     must_a = (a[:, 1] - a[:, 0]) / 2.0 > t
     must_b = (b[:, 1] - b[:, 0]) / 2.0 > t
-    order_b = np.argsort(b[:, 0], kind="mergesort")
-    births_b = b[order_b, 0].copy()
-    every = np.arange(n)
-    ptr, adj = _threshold_graph(a, b, order_b, births_b, every, t)
+    ptr, adj = _threshold_graph(a, b, build(b), np.arange(n), t)
     # Hopcroft-Karp on the rows that must be matched.
     rows = np.flatnonzero(must_a)
     sub_ptr = np.zeros(len(rows) + 1, np.int64)
