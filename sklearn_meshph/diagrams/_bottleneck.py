@@ -102,25 +102,19 @@ def _max_matching(adj_ptr, adj, n_left, n_right):
 @numba.njit(cache=True)
 def _threshold_graph(a, b, tree_b, rows, t):
     """CSR graph from ``a[rows]`` to the points of ``b`` within L-infinity ``t``, found
-    through the 2-d tree of ``b`` (ties and clusters cost nothing more)."""
+    through the 2-d tree of ``b`` (ties and clusters cost nothing more). Counted first,
+    then filled: the graph is the only large allocation of a threshold test."""
     ptr = np.zeros(len(rows) + 1, np.int64)
-    capacity = 4 * len(rows) + 16
-    adj = np.empty(capacity, np.int64)
     near = np.empty(len(b), np.int64)
     stack = np.empty(STACK, np.int64)
-    k = 0
     for r in range(len(rows)):
         i = rows[r]
-        found = within(tree_b, b, a[i, 0], a[i, 1], t, near, stack)
-        if k + found > capacity:
-            capacity = max(2 * capacity, k + found)
-            grown = np.empty(capacity, np.int64)
-            grown[:k] = adj[:k]
-            adj = grown
-        adj[k : k + found] = near[:found]
-        k += found
-        ptr[r + 1] = k
-    return ptr, adj[:k]
+        ptr[r + 1] = ptr[r] + within(tree_b, b, a[i, 0], a[i, 1], t, near, stack)
+    adj = np.empty(ptr[-1], np.int64)
+    for r in range(len(rows)):
+        i = rows[r]
+        within(tree_b, b, a[i, 0], a[i, 1], t, adj[ptr[r] : ptr[r + 1]], stack)
+    return ptr, adj
 
 
 @numba.njit(cache=True)
@@ -304,9 +298,9 @@ def _threshold_bottleneck(a, b):
     The distance is one of the candidate values: 0, a half-persistence (point to the
     diagonal) or a pairwise L-infinity distance, and at least the largest cheapest move
     of a single point, which is often the answer and is tried first. Otherwise the
-    thresholds ``lo * 2^(2^k)`` bracket it from below, the bracket is halved in log
-    scale until its ends are within a factor of two, and the candidates inside it are
-    narrowed by deterministic strided samples until few enough remain to sort. Every
+    thresholds ``lo * 2^k`` bracket it within a factor of two, and the candidates
+    inside are narrowed by deterministic strided samples until few enough remain to
+    sort. Every
     test of a threshold is a Hopcroft-Karp matching on the pairs within it, found
     through 2-d trees, so the tests stay on graphs about as sparse as the answer's, and
     memory stays O(n + m + 32k) plus those graphs however the points tie or cluster.
@@ -317,7 +311,7 @@ def _threshold_bottleneck(a, b):
         return lo
     # Sending everything to the diagonal is feasible at the largest half-persistence.
     hi = max(np.max((a[:, 1] - a[:, 0]) / 2.0), np.max((b[:, 1] - b[:, 0]) / 2.0))
-    # A feasible threshold within a factor 2 of an infeasible one, in O(log log) tests.
+    # A feasible threshold within a factor 2 of an infeasible one.
     if lo == 0.0:  # every point has a copy across or lies on the diagonal
         start = hi * 2.0**-60
         if _feasible(a, b, tree_a, tree_b, start):
@@ -325,20 +319,13 @@ def _threshold_bottleneck(a, b):
         else:
             lo = start
     if lo > 0.0:
-        power = 1.0
-        while lo * 2.0**power < hi:
-            probe = lo * 2.0**power
-            if _feasible(a, b, tree_a, tree_b, probe):
-                hi = probe
+        # Doubling, not faster: a feasible probe costs a graph as large as its
+        # threshold's, so it should not overshoot the answer by more than 2.
+        while 2.0 * lo < hi:
+            if _feasible(a, b, tree_a, tree_b, 2.0 * lo):
+                hi = 2.0 * lo
                 break
-            lo = probe
-            power *= 2.0
-        while hi > 2.0 * lo:
-            probe = np.sqrt(lo) * np.sqrt(hi)
-            if _feasible(a, b, tree_a, tree_b, probe):
-                hi = probe
-            else:
-                lo = probe
+            lo *= 2.0
     # The answer is the smallest feasible candidate in (lo, hi]: hi itself, or one of
     # the candidates strictly below it. Strided samples of those narrow the bracket
     # until few remain; excluding hi keeps ties (integer-valued diagrams, where many
