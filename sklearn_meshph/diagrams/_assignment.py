@@ -1,9 +1,11 @@
 """Pieces shared by the assignment solvers: augmenting an alternating path, a binary
-heap, and a total order on diagrams that fixes the orientation of a pair."""
+heap, a total order on diagrams that fixes the orientation of a pair, and the
+collapse of duplicated points into multiplicities."""
 
 from __future__ import annotations
 
 import numba
+import numpy as np
 
 DIAGONAL = -2  # a point assigned to the diagonal
 
@@ -69,3 +71,25 @@ def heap_pop(keys, items, size):
         keys[pos] = key
         items[pos] = item
     return size
+
+
+@numba.njit(cache=True)
+def collapse(d):
+    """The distinct points of ``d`` by increasing persistence (ties by birth, death),
+    the index among them of each point of ``d``, and their multiplicities: diagrams with
+    many exact duplicates (integer-valued functions, plateaus) are solved on these."""
+    by_death = np.argsort(d[:, 1], kind="mergesort")
+    by_birth = by_death[np.argsort(d[by_death, 0], kind="mergesort")]
+    ranked = by_birth[np.argsort(d[by_birth, 1] - d[by_birth, 0], kind="mergesort")]
+    of = np.empty(len(d), np.int64)
+    distinct = np.empty((len(d), 2))
+    count = np.zeros(len(d), np.int64)
+    k = -1
+    for r in range(len(d)):
+        i = ranked[r]
+        if k < 0 or d[i, 0] != distinct[k, 0] or d[i, 1] != distinct[k, 1]:
+            k += 1
+            distinct[k] = d[i]
+        of[i] = k
+        count[k] += 1
+    return distinct[: k + 1].copy(), of, count[: k + 1].copy()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._assignment import DIAGONAL, augment
+from ._assignment import DIAGONAL, augment, collapse
 from ._kdtree import STACK, build, nearest, within
 
 
@@ -118,26 +118,128 @@ def _threshold_graph(a, b, tree_b, rows, t):
 
 
 @numba.njit(cache=True)
-def _covers(a, b, tree_b, t):
-    """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
-    matched into ``b`` with L-infinity cost at most ``t``."""
-    rows = np.flatnonzero((a[:, 1] - a[:, 0]) / 2.0 > t)
-    if len(rows) == 0:
-        return True
-    if len(rows) > len(b):
-        return False
-    ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
-    return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
+def _max_flow(ptr, adj, demand, capacity):
+    """Largest flow from rows (each sending at most ``demand[r]``) along the edges
+    ``(ptr, adj)`` into columns (each taking at most ``capacity[j]``): the matching test
+    of points with multiplicities. A greedy start, then augmenting paths found by one
+    breadth-first search from every row with demand left, back along edges that carry
+    flow; each path carries as much as it can, so the number of searches depends on the
+    distinct points, not on their copies."""
+    n_rows, n_cols, n_edges = len(demand), len(capacity), len(adj)
+    row_of = np.empty(n_edges, np.int64)
+    for r in range(n_rows):
+        row_of[ptr[r] : ptr[r + 1]] = r
+    t_ptr = np.zeros(n_cols + 1, np.int64)
+    for e in range(n_edges):
+        t_ptr[adj[e] + 1] += 1
+    for j in range(n_cols):
+        t_ptr[j + 1] += t_ptr[j]
+    t_edge = np.empty(n_edges, np.int64)
+    fill = t_ptr[:-1].copy()
+    for e in range(n_edges):
+        t_edge[fill[adj[e]]] = e
+        fill[adj[e]] += 1
+    flow = np.zeros(n_edges, np.int64)
+    sent = np.zeros(n_rows, np.int64)
+    taken = np.zeros(n_cols, np.int64)
+    for r in range(n_rows):
+        for e in range(ptr[r], ptr[r + 1]):
+            push = min(demand[r] - sent[r], capacity[adj[e]] - taken[adj[e]])
+            if push > 0:
+                flow[e] += push
+                sent[r] += push
+                taken[adj[e]] += push
+    total = sent.sum()
+    via_col = np.empty(n_cols, np.int64)
+    via_row = np.empty(n_rows, np.int64)
+    seen_row = np.empty(n_rows, np.bool_)
+    seen_col = np.empty(n_cols, np.bool_)
+    queue = np.empty(n_rows, np.int64)
+    while True:
+        seen_row[:] = False
+        seen_col[:] = False
+        tail = 0
+        for r in range(n_rows):
+            if sent[r] < demand[r]:
+                seen_row[r] = True
+                via_row[r] = -1
+                queue[tail] = r
+                tail += 1
+        head = 0
+        end = -1
+        while head < tail and end < 0:
+            r = queue[head]
+            head += 1
+            for e in range(ptr[r], ptr[r + 1]):
+                j = adj[e]
+                if seen_col[j]:
+                    continue
+                seen_col[j] = True
+                via_col[j] = e
+                if taken[j] < capacity[j]:
+                    end = j
+                    break
+                for k in range(t_ptr[j], t_ptr[j + 1]):
+                    back = t_edge[k]
+                    w = row_of[back]
+                    if flow[back] > 0 and not seen_row[w]:
+                        seen_row[w] = True
+                        via_row[w] = back
+                        queue[tail] = w
+                        tail += 1
+        if end < 0:
+            return total
+        amount = capacity[end] - taken[end]
+        j = end
+        while True:
+            r = row_of[via_col[j]]
+            if via_row[r] < 0:
+                amount = min(amount, demand[r] - sent[r])
+                break
+            amount = min(amount, flow[via_row[r]])
+            j = adj[via_row[r]]
+        j = end
+        while True:
+            flow[via_col[j]] += amount
+            r = row_of[via_col[j]]
+            if via_row[r] < 0:
+                sent[r] += amount
+                break
+            flow[via_row[r]] -= amount
+            j = adj[via_row[r]]
+        taken[end] += amount
+        total += amount
 
 
 @numba.njit(cache=True)
-def _feasible(a, b, tree_a, tree_b, t):
+def _covers(a, count_a, b, count_b, tree_b, t):
+    """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
+    matched into ``b`` with L-infinity cost at most ``t``. Empty counts: every point
+    once (Hopcroft-Karp); otherwise points with multiplicities (a flow)."""
+    rows = np.flatnonzero((a[:, 1] - a[:, 0]) / 2.0 > t)
+    if len(rows) == 0:
+        return True
+    if len(count_a) == 0:
+        if len(rows) > len(b):
+            return False
+        ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
+        return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
+    demand = count_a[rows]
+    if demand.sum() > count_b.sum():
+        return False
+    ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
+    return _max_flow(ptr, adj, demand, count_b) == demand.sum()
+
+
+@numba.njit(cache=True)
+def _feasible(a, count_a, b, count_b, tree_a, tree_b, t):
     """Whether some matching moves no point by more than ``t`` (L-infinity).
 
     Mendelsohn-Dulmage: a matching covering the points of ``a`` that cannot go to the
-    diagonal and one covering those of ``b`` imply one covering both.
+    diagonal and one covering those of ``b`` imply one covering both (with
+    multiplicities too: split each point into its copies).
     """
-    return _covers(a, b, tree_b, t) and _covers(b, a, tree_a, t)
+    return _covers(a, count_a, b, count_b, tree_b, t) and _covers(b, count_b, a, count_a, tree_a, t)
 
 
 @numba.njit(cache=True)
@@ -162,7 +264,7 @@ def _pair_values(a, b, tree_b, lo, hi, stride, out):
 
 
 @numba.njit(cache=True)
-def _first_feasible(a, b, tree_a, tree_b, values):
+def _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values):
     """The smallest of the sorted ``values`` that is feasible, the last one being so:
     thresholds just above the bracket's start are tried first at exponentially growing
     steps (the answer is usually among the first candidates), then the gap is bisected,
@@ -171,14 +273,14 @@ def _first_feasible(a, b, tree_a, tree_b, values):
     step = 1
     while left < right:
         probe = min(left + step - 1, right - 1)
-        if _feasible(a, b, tree_a, tree_b, values[probe]):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[probe]):
             right = probe
             break
         left = probe + 1
         step *= 2
     while left < right:
         middle = (left + right) // 2
-        if _feasible(a, b, tree_a, tree_b, values[middle]):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[middle]):
             right = middle
         else:
             left = middle + 1
@@ -293,6 +395,18 @@ def bottleneck_finite(a, b):
 
 @numba.njit(cache=True)
 def _threshold_bottleneck(a, b):
+    """Exact bottleneck distance of two large finite diagrams: on their distinct points
+    with multiplicities when at least half of the points are copies, else as they are."""
+    distinct_a, _, count_a = collapse(a)
+    distinct_b, _, count_b = collapse(b)
+    if 2 * (len(distinct_a) + len(distinct_b)) <= len(a) + len(b):
+        return _threshold_search(distinct_a, count_a, distinct_b, count_b)
+    none = np.empty(0, np.int64)
+    return _threshold_search(a, none, b, none)
+
+
+@numba.njit(cache=True)
+def _threshold_search(a, count_a, b, count_b):
     """Exact bottleneck distance of two finite diagrams, for large ones.
 
     The distance is one of the candidate values: 0, a half-persistence (point to the
@@ -300,21 +414,21 @@ def _threshold_bottleneck(a, b):
     of a single point, which is often the answer and is tried first. Otherwise the
     thresholds ``lo * 2^k`` bracket it within a factor of two, and the candidates
     inside are narrowed by deterministic strided samples until few enough remain to
-    sort. Every
-    test of a threshold is a Hopcroft-Karp matching on the pairs within it, found
+    sort. Every test of a threshold is a matching (Hopcroft-Karp, or a flow when
+    ``count_a`` and ``count_b`` give multiplicities) on the pairs within it, found
     through 2-d trees, so the tests stay on graphs about as sparse as the answer's, and
     memory stays O(n + m + 32k) plus those graphs however the points tie or cluster.
     """
     tree_a, tree_b = build(a), build(b)
     lo = max(_lower_bound(a, b, tree_b), _lower_bound(b, a, tree_a))
-    if _feasible(a, b, tree_a, tree_b, lo):
+    if _feasible(a, count_a, b, count_b, tree_a, tree_b, lo):
         return lo
     # Sending everything to the diagonal is feasible at the largest half-persistence.
     hi = max(np.max((a[:, 1] - a[:, 0]) / 2.0), np.max((b[:, 1] - b[:, 0]) / 2.0))
     # A feasible threshold within a factor 2 of an infeasible one.
     if lo == 0.0:  # every point has a copy across or lies on the diagonal
         start = hi * 2.0**-60
-        if _feasible(a, b, tree_a, tree_b, start):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, start):
             hi = start
         else:
             lo = start
@@ -322,7 +436,7 @@ def _threshold_bottleneck(a, b):
         # Doubling, not faster: a feasible probe costs a graph as large as its
         # threshold's, so it should not overshoot the answer by more than 2.
         while 2.0 * lo < hi:
-            if _feasible(a, b, tree_a, tree_b, 2.0 * lo):
+            if _feasible(a, count_a, b, count_b, tree_a, tree_b, 2.0 * lo):
                 hi = 2.0 * lo
                 break
             lo *= 2.0
@@ -339,7 +453,7 @@ def _threshold_bottleneck(a, b):
         _pair_values(a, b, tree_b, lo, hi, count // _SAMPLE, sample)
         sample[_SAMPLE] = hi
         values = np.unique(sample)
-        found = _first_feasible(a, b, tree_a, tree_b, values)
+        found = _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values)
         below = np.searchsorted(values, found) - 1
         if below >= 0:
             lo = values[below]
@@ -350,7 +464,7 @@ def _threshold_bottleneck(a, b):
     _pair_values(a, b, tree_b, lo, hi, 1, values)
     values[count : count + len(diagonal)] = diagonal
     values[-1] = hi
-    return _first_feasible(a, b, tree_a, tree_b, np.unique(values))
+    return _first_feasible(a, count_a, b, count_b, tree_a, tree_b, np.unique(values))
 
 
 @numba.njit(cache=True)

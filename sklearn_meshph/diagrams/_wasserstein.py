@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ._assignment import DIAGONAL, augment, heap_pop, heap_push, precedes
+from ._assignment import DIAGONAL, augment, collapse, heap_pop, heap_push, precedes
 from ._bottleneck import bottleneck_finite
 from ._kdtree import STACK, box_gap, build, ground, nearest, node_maxima
 
@@ -141,8 +141,8 @@ def _optimal_transport(a, b, order, internal_p, inv_scale, cap):
     partner in ``b`` or ``DIAGONAL``.
     """
     if len(a) * len(b) > DENSE_PAIRS:
-        distinct_a, of_a, count_a = _collapse(a)
-        distinct_b, of_b, count_b = _collapse(b)
+        distinct_a, of_a, count_a = collapse(a)
+        distinct_b, of_b, count_b = collapse(b)
         few = len(distinct_a) * len(distinct_b) <= DENSE_PAIRS
         if few and 2 * (len(distinct_a) + len(distinct_b)) <= len(a) + len(b):
             total, flows = _transport_distinct(
@@ -154,27 +154,6 @@ def _optimal_transport(a, b, order, internal_p, inv_scale, cap):
     out = np.empty_like(partner)
     out[rows] = partner
     return total, out
-
-
-@numba.njit(cache=True)
-def _collapse(d):
-    """The distinct points of ``d`` by increasing persistence (ties by birth, death),
-    the index among them of each point of ``d``, and their multiplicities."""
-    by_death = np.argsort(d[:, 1], kind="mergesort")
-    by_birth = by_death[np.argsort(d[by_death, 0], kind="mergesort")]
-    ranked = by_birth[np.argsort(d[by_birth, 1] - d[by_birth, 0], kind="mergesort")]
-    of = np.empty(len(d), np.int64)
-    distinct = np.empty((len(d), 2))
-    count = np.zeros(len(d), np.int64)
-    k = -1
-    for r in range(len(d)):
-        i = ranked[r]
-        if k < 0 or d[i, 0] != distinct[k, 0] or d[i, 1] != distinct[k, 1]:
-            k += 1
-            distinct[k] = d[i]
-        of[i] = k
-        count[k] += 1
-    return distinct[: k + 1].copy(), of, count[: k + 1].copy()
 
 
 @numba.njit(cache=True)
