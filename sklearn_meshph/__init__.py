@@ -2,7 +2,9 @@
 eigenfunctions, as scikit-learn estimators.
 
 One sub-package per stage over a shared mesh layer (see ``docs/architecture.md``):
-:mod:`.mesh` (input, validation, cleaning, ``ScalarField``), :mod:`.spectral` (Laplacians,
+:mod:`.mesh` (input, validation, cleaning, ``ScalarField``), :mod:`.pointcloud` (point
+clouds as input: validation, files, their Laplacian and neighbourhood graph),
+:mod:`.spectral` (Laplacians,
 eigensolver, ``LaplacianEigenTransformer``), :mod:`.persistence` (lower-star and extended
 persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
 ``DiagramDistance``, converters); :mod:`.datasets`, :mod:`.plotting` and :mod:`.cli`
@@ -10,7 +12,7 @@ beside them.
 """
 
 from .combine import CombinedDistance, FeatureDistance
-from .datasets import load_mesh_folder, make_shapes
+from .datasets import load_mesh_folder, make_shapes, sample_point_cloud
 from .diagrams import (
     DiagramDistance,
     bottleneck_distance,
@@ -34,6 +36,8 @@ from .mesh import (
 )
 from .persistence import LowerStarPersistence, lower_star_persistence
 from .pipelines import make_mesh_distance
+from .pointcloud import check_point_cloud
+from .pointcloud.laplacians import point_cloud_laplacian
 from .spectral import (
     CacheWarning,
     LaplacianEigenTransformer,
@@ -84,6 +88,7 @@ __all__ = [
     "ShapeDNA",
     "bottleneck_distance",
     "check_mesh",
+    "check_point_cloud",
     "clean_mesh",
     "cotangent_laplacian",
     "from_giotto",
@@ -95,6 +100,8 @@ __all__ = [
     "lower_star_persistence",
     "make_mesh_distance",
     "make_shapes",
+    "point_cloud_laplacian",
+    "sample_point_cloud",
     "pairwise_diagram_distances",
     "sliced_wasserstein_distance",
     "to_giotto",

@@ -1,4 +1,5 @@
-"""Datasets: a folder of meshes, one class per sub-folder, and synthetic shapes."""
+"""Datasets: a folder of meshes, one class per sub-folder, synthetic shapes, and point
+clouds sampled from meshes."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ from sklearn.utils import Bunch, check_random_state
 
 from ._param_validation import Interval, validate_params
 from ._progress import parallel, track
-from .mesh.reading import COMPRESSIONS, read_mesh_file
+from .mesh.reading import COMPRESSIONS
+from .mesh.validation import check_mesh
+from .pointcloud.reading import POINT_CLOUD_FORMATS, read_sample_file
 
-__all__ = ["load_mesh_folder", "make_shapes"]
+__all__ = ["load_mesh_folder", "make_shapes", "sample_point_cloud"]
 
 _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
@@ -24,6 +27,19 @@ _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 MESH_EXTENSIONS = _PLAIN_EXTENSIONS + tuple(
     ext + compression for compression in COMPRESSIONS for ext in _PLAIN_EXTENSIONS
 )
+
+_CLOUD_EXTENSIONS = tuple("." + f for f in POINT_CLOUD_FORMATS)
+
+#: The endings of the text point-cloud formats, plain and compressed (``.xyz``,
+#: ``.pts``, ``.xyz.gz``...). A PLY (or other mesh format) without faces is a point
+#: cloud too, under its mesh ending.
+POINT_CLOUD_EXTENSIONS = _CLOUD_EXTENSIONS + tuple(
+    ext + compression for compression in COMPRESSIONS for ext in _CLOUD_EXTENSIONS
+)
+
+#: The file name endings :func:`load_mesh_folder` reads by default: meshes
+#: (``MESH_EXTENSIONS``) and point clouds (``POINT_CLOUD_EXTENSIONS``).
+SAMPLE_EXTENSIONS = MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS
 
 
 @validate_params(
@@ -35,32 +51,41 @@ MESH_EXTENSIONS = _PLAIN_EXTENSIONS + tuple(
     }
 )
 def load_mesh_folder(
-    path, *, extensions=MESH_EXTENSIONS, load=True, n_jobs=None, verbose=0
+    path, *, extensions=SAMPLE_EXTENSIONS, load=True, n_jobs=None, verbose=0
 ) -> Bunch:
-    """Load a folder of meshes with one class per sub-folder.
+    """Load a folder of meshes or point clouds with one class per sub-folder.
 
     Like :func:`sklearn.datasets.load_files`: every sub-folder of ``path`` is a class
-    (sorted by name), every mesh file in it a sample (sorted by name). Sub-folders whose
-    names start with ``_`` or ``.`` are ignored, and so are files whose names do not end
-    with one of ``extensions``. A sub-folder without mesh files is not a class.
+    (sorted by name), every mesh or point-cloud file in it a sample (sorted by name).
+    Sub-folders whose names start with ``_`` or ``.`` are ignored, and so are files whose
+    names do not end with one of ``extensions``. A sub-folder without such files is not
+    a class.
+
+    Point clouds are ``.xyz`` and ``.pts`` text files and files of a mesh format without
+    faces (a PLY of vertices); they load as ``(n, 3)`` float64 arrays, which every
+    estimator takes as point clouds. A folder may mix meshes and clouds.
 
     Compressed files (``.gz``, ``.bz2``, ``.xz``, e.g. ``ant/081.off.gz``) are
     decompressed in memory, in the format of the inner name; a file that decompresses
-    beyond ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes (2 GiB) is
-    refused.
+    beyond ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes (2 GiB), or a
+    text point cloud beyond ``sklearn_meshph.pointcloud.reading.MAX_TEXT_SIZE`` bytes
+    (512 MiB), is refused. Only the formats of ``MESH_FORMATS`` and
+    ``POINT_CLOUD_FORMATS`` are read, whatever ``extensions`` says (no archives).
 
     Parameters
     ----------
     path : str or os.PathLike
         The root folder.
-    extensions : tuple of str, default=MESH_EXTENSIONS
-        File name endings that count as meshes (case-insensitive). The default holds
-        ``.obj``, ``.ply``, ``.off``, ``.stl`` and ``.glb``, each also followed by
-        ``.gz``, ``.bz2`` or ``.xz``.
+    extensions : tuple of str, default=SAMPLE_EXTENSIONS
+        File name endings that count as samples (case-insensitive). The default holds
+        ``.obj``, ``.ply``, ``.off``, ``.stl``, ``.glb``, ``.xyz`` and ``.pts``, each
+        also followed by ``.gz``, ``.bz2`` or ``.xz``; ``MESH_EXTENSIONS`` keeps the
+        mesh formats only.
     load : bool, default=True
-        Load the meshes (``trimesh.Trimesh`` with ``process=False``, vertex order kept).
-        With ``False``, ``data`` holds the file paths, which every estimator accepts
-        too: meshes are then read inside the workers, which saves memory.
+        Load the samples: meshes as ``trimesh.Trimesh`` (``process=False``, vertex order
+        kept), point clouds as ``(n, 3)`` arrays. With ``False``, ``data`` holds the file
+        paths, which every estimator accepts too: files are then read inside the
+        workers, which saves memory.
     n_jobs : int, default=None
         Files read in parallel through joblib: ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context, ``-1`` means all processors. The
@@ -73,14 +98,15 @@ def load_mesh_folder(
     Returns
     -------
     data : Bunch
-        ``data`` (meshes or paths), ``target`` (int labels), ``target_names``,
-        ``filenames`` and ``DESCR``.
+        ``data`` (meshes, point clouds or paths), ``target`` (int labels),
+        ``target_names``, ``filenames`` and ``DESCR``.
 
     Raises
     ------
     ValueError
-        If ``path`` is not a folder, holds no mesh file in its sub-folders, or a file
-        cannot be read (the message names the sample and the file).
+        If ``path`` is not a folder, holds no mesh or point-cloud file in its
+        sub-folders, or a file cannot be read (the message names the sample and the
+        file).
 
     Examples
     --------
@@ -115,12 +141,12 @@ def load_mesh_folder(
             f"no mesh files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
         )
     if load:
-        jobs = (delayed(read_mesh_file)(f, f"sample {k}") for k, f in enumerate(filenames))
+        jobs = (delayed(read_sample_file)(f, f"sample {k}") for k, f in enumerate(filenames))
         data = list(
             track(
                 parallel(n_jobs)(jobs),
                 total=len(filenames),
-                desc="reading meshes",
+                desc="reading files",
                 verbose=verbose,
             )
         )
@@ -131,7 +157,7 @@ def load_mesh_folder(
         target=np.asarray(target),
         target_names=np.asarray(names),
         filenames=np.asarray([str(f) for f in filenames]),
-        DESCR=f"Meshes from {os.fspath(path)}: {len(filenames)} files, {len(names)} classes.",
+        DESCR=f"Samples from {os.fspath(path)}: {len(filenames)} files, {len(names)} classes.",
     )
 
 
@@ -298,3 +324,63 @@ def make_shapes(
         target_names=np.asarray(names),
         DESCR=make_shapes.__doc__.split("\n\n")[1],
     )
+
+
+@validate_params(
+    {
+        "n_points": [Interval(Integral, 1, None, closed="left")],
+        "noise": [Interval(Real, 0, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+)
+def sample_point_cloud(mesh, n_points: int, *, noise: float = 0.0, random_state=None):
+    """Sample points uniformly on a mesh's surface, optionally with Gaussian noise.
+
+    A scan without connectivity, made from a mesh: for benchmarks, tests, and to
+    compare a shape's mesh with its point cloud.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
+        See :func:`check_mesh`.
+    n_points : int
+        Points to draw.
+    noise : float, default=0.0
+        Standard deviation of the Gaussian noise added to every coordinate, relative to
+        the length of the mesh's bounding-box diagonal.
+    random_state : int, RandomState instance or None, default=None
+        Makes the sample reproducible.
+
+    Returns
+    -------
+    points : ndarray of shape (n_points, 3)
+        Uniform on the surface (area-weighted): a triangle is drawn with probability
+        proportional to its area, then a point uniformly inside it.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from sklearn_meshph import sample_point_cloud
+    >>> points = sample_point_cloud(trimesh.creation.icosphere(3), 1000, random_state=0)
+    >>> points.shape
+    (1000, 3)
+    """
+    vertices, faces = check_mesh(mesh)
+    rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
+    corners = vertices[faces]
+    areas = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    if not areas.sum() > 0:
+        raise ValueError("mesh: the surface has no area to sample")
+    chosen = rng.choice(len(faces), size=n_points, p=areas / areas.sum())
+    # Uniform barycentric coordinates: reflect the unit square's upper triangle.
+    u, v = rng.random(n_points), rng.random(n_points)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    a, b, c = (corners[chosen, k] for k in range(3))
+    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    if noise > 0:
+        diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+        points = points + rng.normal(scale=noise * diagonal, size=points.shape)
+    return points

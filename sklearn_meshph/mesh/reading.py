@@ -82,7 +82,13 @@ def _decompress(path: str, compression: str, place: str, limit: int) -> io.Bytes
     return buffer
 
 
-def read_mesh_file(path, place: str = "mesh", *, max_decompressed_size: int | None = None):
+def read_mesh_file(
+    path,
+    place: str = "mesh",
+    *,
+    max_decompressed_size: int | None = None,
+    allow_points: bool = False,
+):
     """A mesh file as a ``trimesh.Trimesh``, loaded with ``process=False`` (order kept).
 
     Parameters
@@ -96,6 +102,9 @@ def read_mesh_file(path, place: str = "mesh", *, max_decompressed_size: int | No
     max_decompressed_size : int, optional
         Largest decompressed size of a compressed file, in bytes; default
         ``MAX_DECOMPRESSED_SIZE`` (2 GiB). Decompression stops there.
+    allow_points : bool, default=False
+        Return a file of vertices without triangles (a point cloud, such as a PLY
+        without faces) as a ``trimesh.PointCloud`` instead of refusing it.
 
     Returns
     -------
@@ -146,6 +155,16 @@ def read_mesh_file(path, place: str = "mesh", *, max_decompressed_size: int | No
         loaded = trimesh.load(source, file_type=file_type, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on malformed files
         raise ValueError(f"{place}: cannot read mesh file {path!r}: {exc}") from exc
+    if allow_points and isinstance(loaded, trimesh.Trimesh) and len(loaded.faces) == 0:
+        # Forced into a mesh, a file of vertices only loses them: read it as points.
+        if hasattr(source, "seek"):
+            source.seek(0)
+        try:
+            points = trimesh.load(source, file_type=file_type, process=False)
+        except Exception as exc:  # as above
+            raise ValueError(f"{place}: cannot read mesh file {path!r}: {exc}") from exc
+        if isinstance(points, trimesh.PointCloud | trimesh.Trimesh) and len(points.vertices):
+            return points
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"{place}: mesh file {path!r} contains no triangles")
     return loaded

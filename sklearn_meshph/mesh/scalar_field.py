@@ -1,4 +1,5 @@
-"""ScalarField: vertex functions on a mesh, the data passed between pipeline stages."""
+"""ScalarField: vertex functions on a mesh or a point cloud, the data passed between
+pipeline stages."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cleaning import CleaningReport
-from .validation import check_faces, check_values, check_vertices
+from .validation import check_edges, check_faces, check_values, check_vertices
 
 __all__ = ["ScalarField"]
 
@@ -20,21 +21,25 @@ def _frozen(array: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class ScalarField:
-    """One or several functions on the vertices of a triangle mesh.
+    """One or several functions on the vertices of a triangle mesh or a point cloud.
 
     This is what :class:`LaplacianEigenTransformer` returns per mesh and what
     :class:`LowerStarPersistence` takes. Everything is plain NumPy, so it pickles and
     crosses process boundaries cheaply.
 
-    Every field is validated when it is made (shapes, finite values, face indices in
-    range), so the compiled stages downstream can trust it.
+    Every field is validated when it is made (shapes, finite values, face and edge
+    indices in range), so the compiled stages downstream can trust it.
+
+    The complex that :class:`LowerStarPersistence` filters is the vertices, the edges of
+    ``faces`` and ``edges``. A point cloud has no faces (an empty ``(0, 3)`` array) and
+    its neighbourhood graph as ``edges``.
 
     Parameters
     ----------
     vertices : ndarray of shape (n_vertices, 3)
         Vertex positions of the (cleaned) mesh the values live on.
     faces : ndarray of shape (n_faces, 3)
-        Triangles, as indices into ``vertices``.
+        Triangles, as indices into ``vertices``; ``(0, 3)`` for a point cloud.
     values : ndarray of shape (n_vertices,) or (n_vertices, n_functions)
         The function values, one row per vertex.
     eigenvalues : ndarray of shape (n_functions,), optional
@@ -53,6 +58,10 @@ class ScalarField:
     spectrum : ndarray of shape (n_eigenpairs,), optional
         Every eigenvalue the eigen stage solved for this mesh, ascending, the constant
         eigenfunction's first (at unit area by default): what :class:`ShapeDNA` reads.
+    edges : ndarray of shape (n_edges, 2), optional
+        Edges of the complex beyond those of the faces, as indices into ``vertices``:
+        for a point cloud, its symmetric k-nearest-neighbour graph (see
+        :class:`LaplacianEigenTransformer`). ``None`` means none.
 
     Examples
     --------
@@ -73,6 +82,7 @@ class ScalarField:
     input_to_kept: np.ndarray | None = field(default=None, repr=False)
     cleaning: CleaningReport | None = field(default=None, repr=False)
     spectrum: np.ndarray | None = field(default=None, repr=False)
+    edges: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         vertices = check_vertices(self.vertices, "ScalarField")
@@ -94,6 +104,9 @@ class ScalarField:
             if spectrum.ndim != 1 or not np.isfinite(spectrum).all():
                 raise ValueError("ScalarField: spectrum must be a finite 1-D array")
             object.__setattr__(self, "spectrum", _frozen(spectrum))
+        if self.edges is not None:
+            edges = check_edges(self.edges, len(vertices), "ScalarField")
+            object.__setattr__(self, "edges", _frozen(edges))
         if self.vertex_indices is not None:
             object.__setattr__(self, "vertex_indices", np.asarray(self.vertex_indices))
         if self.input_to_kept is not None:

@@ -13,7 +13,7 @@ import numpy as np
 
 from .reading import read_mesh_file
 
-__all__ = ["check_faces", "check_mesh", "check_values", "where"]
+__all__ = ["check_edges", "check_faces", "check_mesh", "check_values", "where"]
 
 
 def where(index: int | None, what: str = "mesh") -> str:
@@ -122,6 +122,26 @@ def check_faces(faces, n_vertices: int, place: str = "mesh") -> np.ndarray:
             f"{n_vertices} vertices"
         )
     return np.ascontiguousarray(faces, dtype=np.int64)
+
+
+def check_edges(edges, n_vertices: int, place: str = "mesh") -> np.ndarray:
+    """``edges`` as a C-contiguous int64 ``(m, 2)`` array of indices below ``n_vertices``."""
+    try:
+        edges = np.asarray(edges)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{place}: edges must be an array: {exc}") from exc
+    if edges.ndim != 2 or edges.shape[1] != 2 or edges.dtype.kind not in "iu":
+        raise ValueError(
+            f"{place}: edges must be an integer array of shape (n_edges, 2), got dtype "
+            f"{edges.dtype} and shape {edges.shape}"
+        )
+    if len(edges) and (edges.min() < 0 or edges.max() >= n_vertices):
+        bad = int(np.flatnonzero(((edges < 0) | (edges >= n_vertices)).any(axis=1))[0])
+        raise ValueError(
+            f"{place}: edge {bad} has index {edges[bad].tolist()} out of range for "
+            f"{n_vertices} vertices"
+        )
+    return np.ascontiguousarray(edges, dtype=np.int64)
 
 
 def check_values(values, n_vertices: int, place: str = "values") -> np.ndarray:

@@ -7,7 +7,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh._graph import find_root, mesh_edges
-from ..mesh.validation import check_mesh, check_values
+from ..mesh.validation import check_values
+from ..pointcloud.graph import edge_adjacency, knn_graph
+from ..pointcloud.validation import check_input
 
 __all__ = ["lower_star_persistence", "sublevel_h0"]
 
@@ -80,9 +82,11 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike or point cloud
         The simplicial complex: vertices, edges and triangles of the mesh as given (no
-        cleaning: an unreferenced vertex is a component of its own).
+        cleaning: an unreferenced vertex is a component of its own). A point cloud (an
+        ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points) is filtered on
+        its symmetric 10-nearest-neighbour graph.
     values : array-like of shape (n_vertices,)
         The function, finite.
 
@@ -120,12 +124,16 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
     array([[ 1.,  2.],
            [ 0., inf]])
     """
-    vertices, faces = check_mesh(mesh)
+    vertices, faces = check_input(mesh)
     values = check_values(values, len(vertices))
     if values.ndim != 1:
         raise ValueError(
             f"values must have shape ({len(vertices)},), got {values.shape}: for several "
             "functions on one mesh use LowerStarPersistence, which shares the adjacency"
         )
-    pairs, essential, _ = sublevel_h0(mesh_edges(faces, len(vertices)), values)
+    if faces is None:
+        adjacency = edge_adjacency(knn_graph(vertices), len(vertices))
+    else:
+        adjacency = mesh_edges(faces, len(vertices))
+    pairs, essential, _ = sublevel_h0(adjacency, values)
     return np.vstack([pairs, np.column_stack([essential, np.full(len(essential), np.inf)])])

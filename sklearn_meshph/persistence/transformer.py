@@ -1,4 +1,5 @@
-"""LowerStarPersistence: vertex functions on meshes to persistence diagrams."""
+"""LowerStarPersistence: vertex functions on meshes and point clouds to persistence
+diagrams."""
 
 from __future__ import annotations
 
@@ -12,7 +13,9 @@ from .._param_validation import Interval, Options
 from .._progress import parallel, track
 from ..mesh._graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
-from ..mesh.validation import check_mesh, check_values, where
+from ..mesh.validation import check_values, where
+from ..pointcloud.graph import edge_adjacency, knn_graph
+from ..pointcloud.validation import check_input
 from .extended import closed_surface
 from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
 
@@ -20,25 +23,41 @@ __all__ = ["LowerStarPersistence"]
 
 
 def _sample_arrays(sample, index):
-    """Faces, vertex count and values of a sample, validated once: a ScalarField was
-    validated when it was made, a ``(mesh, values)`` pair is validated here."""
+    """Faces, extra edges, vertex count and values of a sample, validated once: a
+    ScalarField was validated when it was made, a ``(mesh, values)`` pair is validated
+    here (a point cloud gets its kNN graph as edges)."""
     if isinstance(sample, ScalarField):
-        return sample.faces, sample.n_vertices, sample.values
+        return sample.faces, sample.edges, sample.n_vertices, sample.values
     if isinstance(sample, tuple | list) and len(sample) == 2:
         mesh, values = sample
-        vertices, faces = check_mesh(mesh, index=index)
-        return faces, len(vertices), check_values(values, len(vertices), where(index))
+        vertices, faces = check_input(mesh, index=index)
+        values = check_values(values, len(vertices), where(index))
+        if faces is None:
+            return np.empty((0, 3), dtype=np.int64), knn_graph(vertices), len(vertices), values
+        return faces, None, len(vertices), values
     raise TypeError(
         f"sample {index}: expected a ScalarField or a (mesh, values) pair, "
         f"got {type(sample).__name__}"
     )
 
 
+def _complex_adjacency(faces, edges, n_vertices):
+    """The vertex adjacency of the edges of ``faces`` and of ``edges`` (when not None)."""
+    if edges is None:
+        return mesh_edges(faces, n_vertices)
+    if len(faces):
+        pairs = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]], edges])
+        return edge_adjacency(pairs, n_vertices)
+    return edge_adjacency(edges, n_vertices)
+
+
 def _diagrams_one(sample, index, *, filtration, essential, min_persistence, keep):
-    faces, n_vertices, values = _sample_arrays(sample, index)
-    adjacency = mesh_edges(faces, n_vertices)
+    faces, edges, n_vertices, values = _sample_arrays(sample, index)
+    adjacency = _complex_adjacency(faces, edges, n_vertices)
+    # Essential H1 needs a closed surface of triangles and nothing else: a point cloud
+    # (a graph, whose cycles are artefacts of the neighbourhood size) has none.
     needs_surface = set(FILTRATIONS[filtration].value.surface_diagrams) & set(keep)
-    surface = closed_surface(faces, adjacency) if needs_surface else None
+    surface = closed_surface(faces, adjacency) if needs_surface and edges is None else None
     diagrams = []
     for column in ScalarField.columns_of(values):
         per_function = function_diagrams(
@@ -61,6 +80,11 @@ class LowerStarPersistence(SampleTransformer):
     or a ``(mesh, values)`` pair, becomes its persistence diagram(s), computed exactly
     in float64 by union-find over the vertices in value order (elder rule, ties broken by
     vertex index), the edge adjacency built once per mesh and shared by its functions.
+    On a point cloud (a field without faces, or a ``(points, values)`` pair) the complex
+    is its symmetric 10-nearest-neighbour graph (``ScalarField.edges``): every H0
+    diagram is computed on it exactly as on a mesh's edges, and the essential H1
+    diagram of ``"extended"`` is empty (a graph's cycles come from the neighbourhood
+    size, not from the surface).
 
     Parameters
     ----------

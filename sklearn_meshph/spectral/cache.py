@@ -3,6 +3,8 @@
 Each entry is a folder ``<location>/sklearn_meshph_eigen/<key>/`` holding
 ``header.json`` (the format, the key, the cleaning report) and one ``.npy`` file per
 array (the cleaned vertices, faces and index maps, the eigenvalues and eigenvectors).
+A point cloud's entry has no faces (an empty ``(0, 3)`` array): it is accepted only
+where a point cloud is looked up, and a mesh's entry only where a mesh is.
 Nothing is unpickled: arrays are read from their ``.npy`` header, whose dtype and shape
 are checked against what the key's mesh allows before a byte of data is read, then
 checked for finiteness and consistency. A corrupt, truncated, oversized or mismatched
@@ -33,7 +35,7 @@ from ..mesh.cleaning import CleaningReport, CleanMesh
 __all__ = ["NUMERICS_FILES", "NUMERICS_VERSION", "CacheWarning", "EigenCache", "numerics_digest"]
 
 #: Bumped whenever the numbers a solve gives may change (cleaning, assembly, solver).
-NUMERICS_VERSION = 1
+NUMERICS_VERSION = 2
 
 #: The modules whose changes must bump NUMERICS_VERSION (relative to the package).
 NUMERICS_FILES = (
@@ -48,6 +50,10 @@ NUMERICS_FILES = (
     "spectral/_cholesky.py",
     "spectral/_ordering.py",
     "spectral/solve.py",
+    "pointcloud/cleaning.py",
+    "pointcloud/graph.py",
+    "pointcloud/laplacians.py",
+    "pointcloud/_triangulation.py",
 )
 
 _FORMAT = "sklearn-meshph eigen cache 1"
@@ -113,13 +119,16 @@ class EigenCache:
             digest.update(array.tobytes())
         return digest.hexdigest()
 
-    def load(self, key: str, n_input: int, max_pairs: int):
-        """``(clean, values, vectors)`` of the entry, or None (missing or unusable)."""
+    def load(self, key: str, n_input: int, max_pairs: int, *, points: bool = False):
+        """``(clean, values, vectors)`` of the entry, or None (missing or unusable).
+
+        ``points``: the entry is a point cloud's, whose cleaned sample has no faces
+        (a mesh's has at least one)."""
         entry = self.folder / key
         if not entry.is_dir():
             return None
         try:
-            return self._read(entry, key, n_input, max_pairs)
+            return self._read(entry, key, n_input, max_pairs, points)
         except (OSError, ValueError, KeyError, TypeError) as error:
             warnings.warn(
                 f"eigen cache entry {entry} is unusable and is recomputed: {error}",
@@ -128,7 +137,7 @@ class EigenCache:
             )
             return None
 
-    def _read(self, entry: Path, key: str, n_input: int, max_pairs: int):
+    def _read(self, entry: Path, key: str, n_input: int, max_pairs: int, points: bool):
         with open(entry / "header.json", "rb") as stream:
             text = stream.read(_MAX_HEADER + 1)
         if len(text) > _MAX_HEADER:
@@ -139,8 +148,11 @@ class EigenCache:
         n = int(header["n_vertices"])
         k = int(header["n_pairs"])
         faces_size = int(header["n_faces"]) * 3
-        if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and faces_size > 0):
-            raise ValueError(f"sizes {n} vertices, {k} pairs do not fit the mesh")
+        if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and (faces_size == 0) == points):
+            raise ValueError(
+                f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces do not fit the "
+                f"{'point cloud' if points else 'mesh'}"
+            )
         vertices = _read_array(entry / "vertices.npy", np.float64, 3 * n, 2)
         faces = _read_array(entry / "faces.npy", np.int64, faces_size, 2)
         indices = _read_array(entry / "vertex_indices.npy", np.int64, n, 1)
@@ -149,7 +161,8 @@ class EigenCache:
         vectors = _read_array(entry / "vectors.npy", np.float64, n * k, 2)
         checks = {
             "vertices": vertices.shape == (n, 3) and np.isfinite(vertices).all(),
-            "faces": faces.shape[1:] == (3,) and faces.min() >= 0 and faces.max() < n,
+            "faces": faces.shape == (faces_size // 3, 3)
+            and (points or (faces.min() >= 0 and faces.max() < n)),
             "vertex_indices": indices.shape == (n,)
             and ((indices >= 0) & (indices < n_input)).all(),
             "input_to_kept": to_kept.shape == (n_input,)

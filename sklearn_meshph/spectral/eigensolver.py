@@ -17,7 +17,7 @@ from scipy.sparse.linalg import ArpackError, eigsh
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
-from ..mesh.validation import check_mesh
+from ..pointcloud.validation import check_input
 from .factorization import SOLVERS, ShiftInvertOperator
 from .laplacians import LAPLACIANS
 
@@ -157,8 +157,12 @@ def laplacian_eigenfunctions(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
-        See :func:`check_mesh`. The mesh is cleaned by :func:`clean_mesh`.
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike or point cloud
+        See :func:`check_mesh`. The mesh is cleaned by :func:`clean_mesh`. A point
+        cloud (an ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points, see
+        :func:`check_point_cloud`) gets the point-cloud discretization of
+        ``laplacian`` (:func:`point_cloud_laplacian` for ``"cotangent"``) after its own
+        cleaning (coincident points merged, one component).
     n_eigs : int
         Number of eigenpairs, at least 1 and at most the number of kept vertices.
     laplacian : {"cotangent", "graph"}, default="cotangent"
@@ -198,7 +202,19 @@ def laplacian_eigenfunctions(
     >>> [round(float(v), 1) for v in values]
     [0.0, 2.0, 2.0, 2.0, 6.0]
     """
-    vertices, faces = check_mesh(mesh)
+    vertices, faces = check_input(mesh)
+    if faces is None:
+        from .solve import cloud_eigenpairs  # solve.py builds on this module
+
+        clean, values, vectors = cloud_eigenpairs(
+            vertices, laplacian, "none", components, n_eigs, random_state, None, solver, weld
+        )
+        warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
+        if len(values) < n_eigs:
+            raise ValueError(
+                f"n_eigs must be between 1 and {len(values)} (the kept points), got {n_eigs}"
+            )
+        return values, vectors
     clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
     warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
     n = len(clean.vertices)

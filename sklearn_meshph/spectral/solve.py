@@ -1,4 +1,5 @@
-"""One mesh's cleaning and eigensolve: the unit of work the eigen cache stores.
+"""One sample's cleaning and eigensolve, mesh or point cloud: the unit of work the eigen
+cache stores.
 
 A change here changes the numbers a solve gives: bump
 :data:`sklearn_meshph.spectral.cache.NUMERICS_VERSION` (a test checks).
@@ -12,10 +13,11 @@ import numpy as np
 
 from ..mesh.cleaning import clean_checked
 from ..mesh.validation import where
+from ..pointcloud.cleaning import clean_cloud
 from .eigensolver import generalized_eigenpairs
 from .laplacians import LAPLACIANS
 
-__all__ = ["mesh_eigenpairs", "unit_box"]
+__all__ = ["cloud_eigenpairs", "mesh_eigenpairs", "unit_box"]
 
 
 def unit_box(vertices: np.ndarray) -> tuple[np.ndarray, float]:
@@ -60,20 +62,74 @@ def mesh_eigenpairs(
     points = clean.vertices  # in the unit box: for the factorization's ordering
     L, M = LAPLACIANS[laplacian].value(points, clean.faces)
     clean = replace(clean, vertices=np.ascontiguousarray(vertices[clean.vertex_indices]))
+    sizes = f"{len(clean.vertices)} vertices, {len(clean.faces)} faces"
+    values, vectors = _eigenpairs(
+        L, M, points, laplacian, normalization, n_eigs, seed, index, solver, scale, "mesh", sizes
+    )
+    return clean, values, vectors
+
+
+def cloud_eigenpairs(
+    points,
+    laplacian,
+    normalization,
+    components,
+    n_eigs,
+    seed,
+    index,
+    solver="auto",
+    weld=True,
+):
+    """Clean one validated point cloud and solve its eigenpairs, as
+    :func:`mesh_eigenpairs` does for a mesh.
+
+    The cloud is cleaned by :func:`sklearn_meshph.pointcloud.cleaning.clean_cloud`
+    (coincident points merged, one component) and its operator is the point-cloud
+    discretization of ``laplacian``, both in the unit box and in a canonical point
+    order: a permuted cloud gives the permuted eigenvectors, bit for bit. The returned
+    :class:`CleanMesh` has no faces; its vertices are the kept input points, in input
+    order. ``normalization="area"`` divides the mass by its sum (the area the local
+    triangulations estimate), as for meshes.
+    """
+    unit, scale = unit_box(points)
+    clean, L, M, solve_points, to_output = clean_cloud(
+        points, unit, laplacian=laplacian, components=components, index=index, weld=weld
+    )
+    sizes = f"{len(clean.vertices)} points"
+    values, vectors = _eigenpairs(
+        L,
+        M,
+        solve_points,
+        laplacian,
+        normalization,
+        n_eigs,
+        seed,
+        index,
+        solver,
+        scale,
+        "point cloud",
+        sizes,
+    )
+    return clean, values, np.ascontiguousarray(vectors[to_output])
+
+
+def _eigenpairs(
+    L, M, points, laplacian, normalization, n_eigs, seed, index, solver, scale, kind, sizes
+):
+    """The eigenpairs of an operator built in the unit box, normalized as asked."""
     if normalization == "area":
         M = M / M.diagonal().sum()
-    n_eigs = min(n_eigs, len(clean.vertices))
+    n_eigs = min(n_eigs, L.shape[0])
     try:
         values, vectors = generalized_eigenpairs(
             L, M, n_eigs, seed=seed, points=points, solver=solver
         )
     except (ValueError, RuntimeError, ArithmeticError) as error:  # ARPACK, the factorization
         raise ValueError(
-            f"{where(index)}: the eigensolver failed on the cleaned mesh "
-            f"({len(clean.vertices)} vertices, {len(clean.faces)} faces): {error}"
+            f"{where(index)}: the eigensolver failed on the cleaned {kind} ({sizes}): {error}"
         ) from error
     if normalization == "none" and laplacian == "cotangent":
-        # The mass matrix of the mesh as given is scale^2 times the unit box's: the
+        # The mass matrix of the input as given is scale^2 times the unit box's: the
         # eigenvalues divide by scale^2, M-orthonormal eigenvectors by scale.
         with np.errstate(over="ignore", under="ignore"):
             values, vectors = values / scale / scale, vectors / scale
@@ -81,8 +137,8 @@ def mesh_eigenpairs(
             len(values) > 1 and values[1:].max() < np.finfo(np.float64).tiny
         ):
             raise ValueError(
-                f"{where(index)}: with normalization='none' the eigenpairs of this mesh "
+                f"{where(index)}: with normalization='none' the eigenpairs of this {kind} "
                 f"(extent about {scale:.3g}) are beyond float64's range; use "
                 "normalization='area', which gives the same functions at any scale"
             )
-    return clean, values, vectors
+    return values, vectors

@@ -1,4 +1,5 @@
-"""LaplacianEigenTransformer: meshes to Laplacian eigenfunctions, one cached solve each."""
+"""LaplacianEigenTransformer: meshes and point clouds to Laplacian eigenfunctions, one
+cached solve each."""
 
 from __future__ import annotations
 
@@ -16,12 +17,13 @@ from .._progress import parallel, track
 from .._threads import one_blas_thread
 from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
-from ..mesh.validation import check_mesh
+from ..pointcloud.graph import knn_graph
+from ..pointcloud.validation import check_input
 from .cache import EigenCache
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .signatures import SIGNATURES
-from .solve import mesh_eigenpairs, unit_box
+from .solve import cloud_eigenpairs, mesh_eigenpairs, unit_box
 
 __all__ = ["LaplacianEigenTransformer", "MeshQualityWarning", "RepeatedEigenvalueWarning"]
 
@@ -92,9 +94,11 @@ def _size_hint(mesh) -> int:
     try:
         if isinstance(mesh, str | os.PathLike):
             return os.path.getsize(mesh)
+        if isinstance(mesh, np.ndarray):  # a point cloud
+            return len(mesh)
         return len(mesh.vertices if hasattr(mesh, "vertices") else mesh[0])
     except (OSError, TypeError, IndexError, KeyError):
-        return 0  # invalid input: check_mesh reports it in the worker
+        return 0  # invalid input: check_input reports it in the worker
 
 
 def _repeats(values: np.ndarray, i: int) -> np.ndarray:
@@ -126,7 +130,14 @@ def _cache_of(memory):
     return memory
 
 
+# The faces a point cloud is keyed and stored with.
+_NO_FACES = np.empty((0, 3), dtype=np.int64)
+
+
 def _cached_solve(cache, vertices, faces, settings, n_eigs, seed, index):
+    """One sample's solve through the cache; ``faces`` is None for a point cloud."""
+    points = faces is None
+    solve = cloud_eigenpairs if points else mesh_eigenpairs
     arguments = (
         settings["laplacian"],
         settings["normalization"],
@@ -137,14 +148,18 @@ def _cached_solve(cache, vertices, faces, settings, n_eigs, seed, index):
         settings["solver"],
         settings["weld"],
     )
+    inputs = (vertices,) if points else (vertices, faces)
     if cache is None:
-        return mesh_eigenpairs(vertices, faces, *arguments)
+        return solve(*inputs, *arguments)
     if not isinstance(cache, EigenCache):  # the user's own caching object
-        return cache.cache(mesh_eigenpairs, ignore=["index"])(vertices, faces, *arguments)
-    key = cache.key(vertices, faces, {**settings, "n_eigs": n_eigs, "seed": seed})
-    found = cache.load(key, len(vertices), n_eigs)
+        return cache.cache(solve, ignore=["index"])(*inputs, *arguments)
+    # A cloud is keyed with no faces, which no mesh has: the two kinds never collide.
+    key = cache.key(
+        vertices, _NO_FACES if points else faces, {**settings, "n_eigs": n_eigs, "seed": seed}
+    )
+    found = cache.load(key, len(vertices), n_eigs, points=points)
     if found is None:
-        found = mesh_eigenpairs(vertices, faces, *arguments)
+        found = solve(*inputs, *arguments)
         cache.store(key, found)
     return found
 
@@ -153,7 +168,7 @@ def _eigen_one(mesh, index, *, indices, n_eigs, settings, seed, memory):
     """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
     the block must cover (none for signatures, which do not depend on the basis)."""
     with one_blas_thread():
-        vertices, faces = check_mesh(mesh, index=index)
+        vertices, faces = check_input(mesh, index=index)
         limit = n_eigs + _MAX_GROWTH
         while True:
             clean, values, vectors = _cached_solve(
@@ -192,12 +207,23 @@ def _warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) 
 
 
 class LaplacianEigenTransformer(SampleTransformer):
-    """Compute a Laplacian eigenfunction on each mesh.
+    """Compute a Laplacian eigenfunction on each mesh or point cloud.
 
     The first stage of the mesh-learning pipeline: each mesh becomes a
     :class:`ScalarField` holding the requested eigenfunctions of its Laplace-Beltrami
     operator (the first three non-constant ones by default, starting with the Fiedler
     vector), ready for :class:`LowerStarPersistence`.
+
+    Point clouds (an ``(n, 3)`` array, a ``trimesh.PointCloud``, or a ``.xyz``,
+    ``.pts`` or face-less PLY file; see :func:`check_point_cloud`) go through the same
+    parameters: each Laplacian has a point-cloud discretization
+    (:func:`point_cloud_laplacian` for ``"cotangent"``, the graph Laplacian of the
+    symmetric 10-nearest-neighbour graph for ``"graph"``), solved in the unit box and in
+    a canonical point order (a permuted cloud gives the permuted output, bit for bit).
+    Coincident points are merged, as ``weld`` says (exact duplicates always), with the
+    index maps of cleaning; a cloud in several clusters follows ``components``. The
+    field has no faces and the symmetric 10-nearest-neighbour graph as ``edges``: the
+    complex :class:`LowerStarPersistence` filters.
 
     Parameters
     ----------
@@ -378,8 +404,9 @@ class LaplacianEigenTransformer(SampleTransformer):
 
         Parameters
         ----------
-        X : sequence of meshes
-            Each a trimesh.Trimesh, a (vertices, faces) pair or a path.
+        X : sequence of meshes or point clouds
+            Each a trimesh.Trimesh, a (vertices, faces) pair, a path, an (n, 3) array
+            or a trimesh.PointCloud.
 
         Returns
         -------
@@ -459,10 +486,14 @@ class LaplacianEigenTransformer(SampleTransformer):
                 _warn_if_repeated(values, indices, i, complete)
                 field_values, field_eigenvalues = vectors[:, column], values[column]
             identity = len(clean.vertices) == report.n_input_vertices
+            # A cloud's complex is its kNN graph, built here from the kept points (cheap,
+            # and the same whether the solve came from the cache or not).
+            points = len(clean.faces) == 0
             fields.append(
                 ScalarField(
                     vertices=clean.vertices,
                     faces=clean.faces,
+                    edges=knn_graph(clean.vertices) if points else None,
                     values=field_values,
                     eigenvalues=field_eigenvalues,
                     vertex_indices=None if identity else clean.vertex_indices,

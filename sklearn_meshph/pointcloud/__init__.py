@@ -1,0 +1,18 @@
+"""Point clouds as input: the same pipeline as meshes, on scans without connectivity.
+
+- :mod:`.validation`: ``check_point_cloud``, and ``check_input``, the dispatch between
+  meshes and point clouds that every cloud-taking function goes through;
+- :mod:`.reading`: ``.xyz`` and ``.pts`` text files, and PLY files without faces;
+- :mod:`.cleaning`: the cleaning policy of clouds (coincident points merged, one
+  connected component), in a canonical point order;
+- :mod:`.laplacians`: ``point_cloud_laplacian`` (local Delaunay cotangent) and the
+  registry ``CLOUD_LAPLACIANS``, one discretization per name of ``LAPLACIANS``;
+- :mod:`.graph`: the symmetric kNN graph that lower-star persistence filters;
+- :mod:`._triangulation`: compiled local Delaunay triangulations.
+"""
+
+# Only what the mesh layer needs here: the Laplacians build on the spectral stage,
+# which imports this package (``from sklearn_meshph import point_cloud_laplacian``).
+from .validation import check_point_cloud
+
+__all__ = ["check_point_cloud"]
