@@ -1,7 +1,9 @@
 """Learning quality: leave-one-out 1-NN accuracy of descriptors on real collections.
 
     python benchmarks/learning_quality.py [--collections watertight_dev sumner shapes]
-                                          [--n-jobs 2] [--cache DIR]
+                                          [--n-jobs 2] [--cache DIR] [--clouds]
+    python benchmarks/learning_quality.py --clouds-only [--densities 1000 3000 10000]
+                                          [--noises 0 0.005] [--cloud-subset N]
 
 Every configuration is a scikit-learn pipeline from meshes to a precomputed distance
 matrix, scored by leave-one-out 1-NN on the full matrix (each mesh classified by its
@@ -13,6 +15,14 @@ and the Sumner meshes (from SKLEARN_MESHPH_DATA, default ../shared/data) and
 ``gh_signatures.py`` that the paper compares itself with, unless ``--no-gh``) run in the
 same process; learned models on the default's diagrams are scored by nested
 cross-validation (unless ``--no-models``).
+
+With ``--clouds`` (after the mesh tables) or ``--clouds-only`` (alone), the point-cloud
+section: points sampled on each mesh's surface with ``sample_point_cloud`` at each of
+``--densities``, with Gaussian noise of each of ``--noises`` (relative to the bounding-box
+diagonal; seed = the mesh's index, so every run draws the same clouds), run through the
+default pipeline ``make_mesh_distance()`` and scored by the same leave-one-out and
+10 x 5-fold 1-NN, beside the default pipeline on the meshes themselves. ``--cloud-subset
+N`` keeps the first N meshes of each class (all by default).
 """
 
 from __future__ import annotations
@@ -42,6 +52,7 @@ from sklearn_meshph import (
     LowerStarPersistence,
     ShapeDNA,
     make_mesh_distance,
+    sample_point_cloud,
 )
 from sklearn_meshph.mesh import check_mesh
 from sklearn_meshph.spectral.solve import mesh_eigenpairs
@@ -269,10 +280,39 @@ def main():
         action="store_false",
         help="skip the Gromov-Hausdorff comparator (gh_signatures.py; minutes per collection)",
     )
+    parser.add_argument(
+        "--clouds", action="store_true", help="also the point-cloud section (after the meshes)"
+    )
+    parser.add_argument("--clouds-only", action="store_true", help="only the point-cloud section")
+    parser.add_argument(
+        "--cloud-collections",
+        nargs="+",
+        default=["watertight_dev", "sumner"],
+        help="collections of the point-cloud section",
+    )
+    parser.add_argument(
+        "--densities", type=int, nargs="*", default=[1000, 3000, 10000], help="points per cloud"
+    )
+    parser.add_argument(
+        "--noises",
+        type=float,
+        nargs="+",
+        default=[0.0, 0.005],
+        help="noise of the clouds, relative to the bounding-box diagonal",
+    )
+    parser.add_argument(
+        "--cloud-subset",
+        type=int,
+        default=None,
+        help="the first N meshes of each class in the point-cloud section (default: all)",
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as temporary:
         memory = joblib.Memory(args.cache or temporary, verbose=0)
-        run(args, memory)
+        if not args.clouds_only:
+            run(args, memory)
+        if args.clouds or args.clouds_only:
+            run_clouds(args, memory)
 
 
 def run(args, memory):
@@ -362,6 +402,94 @@ def run(args, memory):
                 mean, std, seconds = per.get(n, (float("nan"),) * 3)
                 cells += [f"{mean:.3f} +/- {std:.3f}", f"{seconds:.0f}"]
             print(f"| {model} | " + " | ".join(cells) + " |")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"\npeak resident memory of this process: {peak:.0f} MB")
+
+
+def subset(y, per_class):
+    """Indices of the first ``per_class`` samples of each class (all with None)."""
+    if per_class is None:
+        return np.arange(len(y))
+    return np.concatenate([np.flatnonzero(y == c)[:per_class] for c in np.unique(y)])
+
+
+def score_default(samples, y, memory, n_jobs, **params):
+    """(LOO, 10 x 5-fold, seconds) of ``make_mesh_distance()`` (with ``params`` set) on
+    ``samples``."""
+    start = time.perf_counter()
+    pipeline = make_mesh_distance(memory=memory, n_jobs=n_jobs, random_state=0)
+    matrix = pipeline.set_params(**params).fit_transform(samples)
+    seconds = time.perf_counter() - start
+    return loo_1nn(matrix, y), cv_1nn(matrix, y), seconds
+
+
+NO_EXT1 = "meshes, without essential H1"
+
+
+def run_clouds(args, memory):
+    """The point-cloud section: the default pipeline on clouds sampled from each
+    collection's meshes, beside the same pipeline on the meshes."""
+    rows, sizes = {}, {}
+    names = []
+    for name in args.cloud_collections:
+        loaded = collection(name, args.n_jobs)
+        if loaded is None:
+            print(f"skipping {name}: not found in {DATA}")
+            continue
+        meshes, y, _ = loaded
+        keep = subset(y, args.cloud_subset)
+        meshes, y = [meshes[i] for i in keep], y[keep]
+        names.append(name)
+        vertices = np.array([len(m.vertices) for m in meshes])
+        sizes[name] = (
+            len(meshes),
+            int(np.median(vertices)),
+            int(vertices.min()),
+            int(vertices.max()),
+        )
+        rows.setdefault("meshes", {})[name] = score_default(meshes, y, memory, args.n_jobs)
+        print(f"  {name:15s} meshes: {rows['meshes'][name][0]:.3f}", flush=True)
+        # A cloud has no essential H1 (its kNN graph's cycles are not the surface's):
+        # the same pipeline on the meshes without that part.
+        rows.setdefault(NO_EXT1, {})[name] = score_default(
+            meshes, y, memory, args.n_jobs, distance__weights={"ext0": 0.5, "ext1": 0.0, "dna": 0.5}
+        )
+        print(f"  {name:15s} {NO_EXT1}: {rows[NO_EXT1][name][0]:.3f}", flush=True)
+        for n_points in args.densities:
+            for noise in args.noises:
+                clouds = [
+                    sample_point_cloud(m, n_points, noise=noise, random_state=k)
+                    for k, m in enumerate(meshes)
+                ]
+                row = f"{n_points} points, noise {noise:g}"
+                rows.setdefault(row, {})[name] = score_default(clouds, y, memory, args.n_jobs)
+                loo, cv, seconds = rows[row][name]
+                print(f"  {name:15s} {row}: {loo:.3f} ({seconds:.0f} s)", flush=True)
+    if not names:
+        return
+    print(
+        "\nPoint clouds sampled from the meshes (noise: standard deviation relative to the "
+        "bounding-box diagonal),\nthrough make_mesh_distance(): leave-one-out and 10 x 5-fold "
+        "1-NN accuracy, seconds from the samples\nto the matrix (eigensolves included) and "
+        "milliseconds per sample:\n"
+    )
+    for name in names:
+        n, median, low, high = sizes[name]
+        print(f"- {name}: {n} meshes of {low} to {high} vertices (median {median})")
+    print(
+        "\n| input | "
+        + " | ".join(f"{n} LOO | {n} 5-fold | {n} s | {n} ms/sample" for n in names)
+        + " |"
+    )
+    print("|---|" + "---|---|---|---|" * len(names))
+    for row, per in rows.items():
+        cells = []
+        for n in names:
+            loo, cv, seconds = per.get(n, (float("nan"),) * 3)
+            cells += [f"{loo:.3f}", f"{cv:.3f}", f"{seconds:.1f}"]
+            cells.append(f"{1000 * seconds / sizes[n][0]:.0f}")
+        label = "meshes (the default pipeline)" if row == "meshes" else row
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak resident memory of this process: {peak:.0f} MB")
 

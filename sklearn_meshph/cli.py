@@ -1,5 +1,5 @@
-"""The command line's main job: classify a folder of meshes (or built-in synthetic
-shapes) end to end.
+"""The command line's main job: classify a folder of meshes or point clouds (or built-in
+synthetic shapes) end to end.
 
 Run ``python -m sklearn_meshph --help`` (or the ``sklearn-meshph`` console script). The
 choices of ``--laplacian``, ``--filtration`` and ``--metric`` come from the registries
@@ -46,7 +46,7 @@ from sklearn.model_selection import StratifiedKFold
 from sklearn.neighbors import KNeighborsClassifier
 
 from ._report import format_confusion, wrap, write_data, write_pictures
-from .datasets import MESH_EXTENSIONS, load_mesh_folder, make_shapes
+from .datasets import SAMPLE_EXTENSIONS, load_mesh_folder, make_shapes
 from .diagrams import METRICS, DiagramDistance
 from .mesh import MeshCleaningWarning
 from .persistence import FILTRATIONS, LowerStarPersistence
@@ -105,12 +105,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m sklearn_meshph",
         description=(
-            "Classify triangle meshes by persistent homology of a Laplacian eigenfunction "
-            "(Zhang, Liu, Rosen & Hajij): eigenfunction per mesh -> lower-star persistence "
-            "diagrams -> bottleneck/Wasserstein distances -> k-NN, scored by stratified "
-            "cross-validation. Prints accuracy, a confusion matrix and the time per stage, "
-            "writes the distances, diagrams, predictions and a summary, and a t-SNE "
-            "embedding, example diagrams and eigenfunctions as PNGs."
+            "Classify triangle meshes or point clouds by persistent homology of a Laplacian "
+            "eigenfunction (Zhang, Liu, Rosen & Hajij): eigenfunction per sample -> "
+            "lower-star persistence diagrams -> bottleneck/Wasserstein distances -> k-NN, "
+            "scored by stratified cross-validation. Prints accuracy, a confusion matrix and "
+            "the time per stage, writes the distances, diagrams, predictions and a summary, "
+            "and a t-SNE embedding, example diagrams and eigenfunctions as PNGs."
         ),
         epilog=_EPILOG,
         formatter_class=_HelpFormatter,
@@ -119,14 +119,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "path",
         nargs="?",
-        help="mesh folder with one sub-folder per class (like sklearn's load_files); "
-        "without it, a built-in synthetic shape set (make_shapes) is generated",
+        help="folder of meshes or point clouds (.xyz, .pts, PLY without faces) with one "
+        "sub-folder per class (like sklearn's load_files); without it, a built-in "
+        "synthetic shape set (make_shapes) is generated",
     )
     parser.add_argument(
         "--extensions",
         type=_parse_extensions,
-        default=MESH_EXTENSIONS,
-        help="comma list of file endings that count as meshes in PATH (case-insensitive)",
+        default=SAMPLE_EXTENSIONS,
+        help="comma list of file endings that count as samples (meshes or point clouds) "
+        "in PATH (case-insensitive)",
     )
     parser.add_argument(
         "--eigen-index",
@@ -420,7 +422,15 @@ def _run(args) -> int:
     meshes, y = list(data.data), np.asarray(data.target)
     timings["load"] = time.perf_counter() - start
     counts = np.bincount(y, minlength=len(class_names))
-    print(f"data: {source}: {len(meshes)} meshes, {len(class_names)} classes")
+    n_clouds = sum(isinstance(m, np.ndarray) for m in meshes)
+    kind = (
+        "meshes"
+        if n_clouds == 0
+        else "point clouds"
+        if n_clouds == len(meshes)
+        else f"samples ({len(meshes) - n_clouds} meshes, {n_clouds} point clouds)"
+    )
+    print(f"data: {source}: {len(meshes)} {kind}, {len(class_names)} classes")
     print(wrap("classes: " + ", ".join(class_names)))
     print("pipeline:")
     for step in (eigen, persistence, distance):

@@ -132,13 +132,15 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
 def plot_mesh_function(
     vertices, faces=None, values=None, ax=None, *, cmap="coolwarm", colorbar_label=None
 ):
-    """Draw a function on a triangle mesh (face colour = mean of its vertex values).
+    """Draw a function on a triangle mesh (face colour = mean of its vertex values), or
+    on a point cloud (no faces: one dot per point).
 
     Parameters
     ----------
     vertices : ndarray of shape (n, 3), or a ScalarField
         With a ScalarField, ``faces`` and ``values`` (its first column) come from it.
     faces : ndarray of shape (m, 3)
+        Empty (or None) for a point cloud.
     values : ndarray of shape (n,)
     ax : matplotlib 3-D Axes, optional
     cmap : str, default="coolwarm"
@@ -161,11 +163,16 @@ def plot_mesh_function(
 
     ax = _axes(ax, projection="3d")
     vertices = np.asarray(vertices, dtype=float)
-    faces = np.asarray(faces)
-    face_values = np.asarray(values, dtype=float)[faces].mean(axis=1)
-    norm = plt.Normalize(face_values.min(), face_values.max())
-    colors = plt.get_cmap(cmap)(norm(face_values))
-    ax.add_collection3d(Poly3DCollection(vertices[faces], facecolors=colors, linewidths=0))
+    faces = np.asarray(faces if faces is not None else np.empty((0, 3)), dtype=np.intp)
+    values = np.asarray(values, dtype=float)
+    if len(faces) == 0:  # a point cloud: one dot per point
+        norm = plt.Normalize(values.min(), values.max())
+        ax.scatter(*vertices.T, c=values, cmap=cmap, norm=norm, s=2, linewidths=0)
+    else:
+        face_values = values[faces].mean(axis=1)
+        norm = plt.Normalize(face_values.min(), face_values.max())
+        colors = plt.get_cmap(cmap)(norm(face_values))
+        ax.add_collection3d(Poly3DCollection(vertices[faces], facecolors=colors, linewidths=0))
     center = (vertices.max(0) + vertices.min(0)) / 2
     radius = (vertices.max(0) - vertices.min(0)).max() / 2
     ax.set_xlim(center[0] - radius, center[0] + radius)

@@ -1,6 +1,8 @@
 """The command line's main job as a tool: options, errors, result files, many classes."""
 
 import csv
+import gzip
+import importlib.util
 import json
 
 import numpy as np
@@ -12,6 +14,7 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    load_mesh_folder,
     pairwise_diagram_distances,
 )
 from sklearn_meshph.cli import build_parser, format_confusion, main
@@ -190,3 +193,66 @@ def test_verbose_zero_prints_nothing(capsys):
     assert "persistence" in capsys.readouterr().err
     LaplacianEigenTransformer(eigen_index=1, verbose=1).fit_transform(meshes)
     assert "eigensolves" in capsys.readouterr().err
+
+
+def _write_clouds(root, n_points=400):
+    """A labelled folder of point clouds sampled from make_shapes, in each format read:
+    .xyz text, gzipped .pts (count first), PLY of vertices only."""
+    from sklearn_meshph import make_shapes, sample_point_cloud
+
+    classes = ("blob", "snake", "star")
+    meshes, y = make_shapes(n_per_class=3, classes=classes, random_state=0, return_X_y=True)
+    for k, (mesh, label) in enumerate(zip(meshes, y, strict=True)):
+        folder = root / classes[label]
+        folder.mkdir(parents=True, exist_ok=True)
+        points = sample_point_cloud(mesh, n_points, noise=0.002, random_state=k)
+        if k % 3 == 0:
+            np.savetxt(folder / f"scan{k}.xyz", points, fmt="%.17g")
+        elif k % 3 == 1:
+            text = f"{len(points)}\n" + "\n".join(" ".join(f"{v:.17g}" for v in p) for p in points)
+            (folder / f"scan{k}.pts.gz").write_bytes(gzip.compress(text.encode()))
+        else:
+            trimesh.PointCloud(points).export(folder / f"scan{k}.ply")
+    return root
+
+
+def test_main_job_on_a_folder_of_point_clouds(tmp_path, capsys):
+    data = _write_clouds(tmp_path / "scans")
+    loaded = load_mesh_folder(data)
+    assert loaded.target.tolist() == [0, 0, 0, 1, 1, 1, 2, 2, 2]
+    assert all(isinstance(x, np.ndarray) and x.shape == (400, 3) for x in loaded.data)
+    out = tmp_path / "out"
+    argv = [str(data), "--folds", "3", "--n-jobs", "1", "--verbose", "0", "--output", str(out)]
+    if importlib.util.find_spec("matplotlib") is None:
+        argv.append("--no-plots")
+    assert main(argv) == 0
+    stdout = capsys.readouterr().out
+    assert "9 point clouds, 3 classes" in stdout
+    # The same matrix as the estimators on the clouds read by load_mesh_folder.
+    fields = LaplacianEigenTransformer(random_state=0).fit_transform(loaded.data)
+    expected = DiagramDistance().fit_transform(LowerStarPersistence().fit_transform(fields))
+    np.testing.assert_allclose(np.load(out / "distances.npy"), expected, rtol=1e-12)
+    assert all(len(f.faces) == 0 and len(f.edges) > 0 for f in fields)
+    with open(out / "predictions.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [row["file"] for row in rows[:3]] == [
+        "blob/scan0.xyz",
+        "blob/scan1.pts.gz",
+        "blob/scan2.ply",
+    ]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["n_samples"] == 9 and summary["class_counts"] == [3, 3, 3]
+    assert summary["accuracy"]["mean"] >= 2 / 3
+    if "--no-plots" not in argv:
+        assert (out / "eigenfunctions.png").stat().st_size > 0
+
+
+def test_point_cloud_files_are_named_when_broken(tmp_path, capfd):
+    data = _write_clouds(tmp_path / "scans", n_points=50)
+    (data / "star" / "scan8.ply").unlink()
+    (data / "star" / "scan8.xyz").write_text("1 2\n3 4\n")
+    code = main(
+        [str(data), "--folds", "2", "--no-plots", "--verbose", "0", "--output", str(tmp_path / "o")]
+    )
+    assert code == 1
+    assert "star/scan8.xyz" in _one_error_line(capfd)

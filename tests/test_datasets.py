@@ -68,6 +68,38 @@ def test_load_mesh_folder(tmp_path):
     assert lazy.data == list(data.filenames)
 
 
+def test_load_mesh_folder_reads_point_clouds_beside_meshes(tmp_path):
+    from sklearn_meshph.datasets import MESH_EXTENSIONS, SAMPLE_EXTENSIONS
+
+    write_folder(tmp_path)
+    points = trimesh.creation.icosphere(2).vertices * [1.0, 1.3, 1.8]  # distinct eigenvalues
+    np.savetxt(tmp_path / "ball" / "c.xyz", points, fmt="%.17g")
+    trimesh.PointCloud(points * 2).export(tmp_path / "box" / "c.ply")
+    (tmp_path / "box" / "d.xyz.zip").write_bytes(b"PK\x03\x04")  # not an ending read
+    data = load_mesh_folder(tmp_path)
+    assert [p.split("/")[-1] for p in data.filenames] == [
+        "a.ply",
+        "b.obj",
+        "c.xyz",
+        "a.ply",
+        "b.obj",
+        "c.ply",
+    ]
+    np.testing.assert_array_equal(data.data[2], points)
+    np.testing.assert_allclose(data.data[5], points * 2)
+    assert isinstance(data.data[0], trimesh.Trimesh) and isinstance(data.data[5], np.ndarray)
+    # The mesh endings alone skip the text clouds (a PLY without faces is still a cloud).
+    meshes = load_mesh_folder(tmp_path, extensions=MESH_EXTENSIONS)
+    assert len(meshes.filenames) == 5
+    assert set(MESH_EXTENSIONS) < set(SAMPLE_EXTENSIONS)
+    assert {".xyz", ".pts", ".pts.gz", ".xyz.xz"} < set(SAMPLE_EXTENSIONS)
+    # Paths are read by the estimators the same way.
+    fields = LaplacianEigenTransformer(eigen_index=1).fit_transform(
+        [data.data[2], load_mesh_folder(tmp_path, load=False).data[2]]
+    )
+    np.testing.assert_array_equal(fields[0].values, fields[1].values)
+
+
 def test_load_mesh_folder_errors(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         load_mesh_folder(tmp_path / "missing")

@@ -251,7 +251,7 @@ def test_parallel_loading_keeps_order(tmp_path, capsys):
     for a, b in zip(serial.data, parallel.data, strict=True):
         np.testing.assert_array_equal(a.vertices, b.vertices)
         np.testing.assert_array_equal(a.faces, b.faces)
-    assert "reading meshes" in capsys.readouterr().err
+    assert "reading files" in capsys.readouterr().err
     load_mesh_folder(tmp_path, verbose=0)
     assert capsys.readouterr().err == ""
 
