@@ -15,9 +15,14 @@ from ._kdtree import STACK, build, nearest, within
 
 
 @numba.njit(cache=True)
-def _max_matching(adj_ptr, adj, n_left, n_right):
+def _max_matching(adj_ptr, adj, n_left, n_right, start):
     """Hopcroft-Karp maximum matching of a bipartite graph in CSR form: its size and the
-    partner of each left and right vertex (-1: unmatched)."""
+    partner of each left and right vertex (-1: unmatched).
+
+    ``start`` proposes a partner for each left vertex (-1: none); the proposals that are
+    edges and do not collide are kept as the initial matching. The threshold search
+    passes the matching of its previous test: thresholds close to each other have
+    nearly the same maximum matching, so few phases are left."""
     # One allocation for all the work arrays: this runs millions of times on tiny graphs.
     work = np.empty(5 * n_left + n_right + 1, np.int64)
     match_left = work[:n_left]
@@ -29,6 +34,16 @@ def _max_matching(adj_ptr, adj, n_left, n_right):
     match_left[:] = -1
     match_right[:] = -1
     size = 0
+    for u in range(n_left):
+        v = start[u]
+        if v < 0 or match_right[v] >= 0:
+            continue
+        for k in range(adj_ptr[u], adj_ptr[u + 1]):
+            if adj[k] == v:
+                match_left[u] = v
+                match_right[v] = u
+                size += 1
+                break
     inf = n_left + n_right + 1
     while True:
         head = tail = 0
@@ -212,10 +227,12 @@ def _max_flow(ptr, adj, demand, capacity):
 
 
 @numba.njit(cache=True)
-def _covers(a, count_a, b, count_b, tree_b, t):
+def _covers(a, count_a, b, count_b, tree_b, t, guess):
     """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
     matched into ``b`` with L-infinity cost at most ``t``. Empty counts: every point
-    once (Hopcroft-Karp); otherwise points with multiplicities (a flow)."""
+    once (Hopcroft-Karp, started from and updating ``guess``, the partner in ``b`` of
+    each point of ``a`` at the previous test); otherwise points with multiplicities (a
+    flow)."""
     rows = np.flatnonzero((a[:, 1] - a[:, 0]) / 2.0 > t)
     if len(rows) == 0:
         return True
@@ -223,7 +240,9 @@ def _covers(a, count_a, b, count_b, tree_b, t):
         if len(rows) > len(b):
             return False
         ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
-        return _max_matching(ptr, adj, len(rows), len(b))[0] == len(rows)
+        size, match_left, _ = _max_matching(ptr, adj, len(rows), len(b), guess[rows])
+        guess[rows] = match_left
+        return size == len(rows)
     demand = count_a[rows]
     if demand.sum() > count_b.sum():
         return False
@@ -232,14 +251,16 @@ def _covers(a, count_a, b, count_b, tree_b, t):
 
 
 @numba.njit(cache=True)
-def _feasible(a, count_a, b, count_b, tree_a, tree_b, t):
+def _feasible(a, count_a, b, count_b, tree_a, tree_b, t, guess_a, guess_b):
     """Whether some matching moves no point by more than ``t`` (L-infinity).
 
     Mendelsohn-Dulmage: a matching covering the points of ``a`` that cannot go to the
     diagonal and one covering those of ``b`` imply one covering both (with
     multiplicities too: split each point into its copies).
     """
-    return _covers(a, count_a, b, count_b, tree_b, t) and _covers(b, count_b, a, count_a, tree_a, t)
+    return _covers(a, count_a, b, count_b, tree_b, t, guess_a) and _covers(
+        b, count_b, a, count_a, tree_a, t, guess_b
+    )
 
 
 @numba.njit(cache=True)
@@ -264,7 +285,7 @@ def _pair_values(a, b, tree_b, lo, hi, stride, out):
 
 
 @numba.njit(cache=True)
-def _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values):
+def _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values, guess_a, guess_b):
     """The smallest of the sorted ``values`` that is feasible, the last one being so:
     thresholds just above the bracket's start are tried first at exponentially growing
     steps (the answer is usually among the first candidates), then the gap is bisected,
@@ -273,14 +294,14 @@ def _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values):
     step = 1
     while left < right:
         probe = min(left + step - 1, right - 1)
-        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[probe]):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[probe], guess_a, guess_b):
             right = probe
             break
         left = probe + 1
         step *= 2
     while left < right:
         middle = (left + right) // 2
-        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[middle]):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, values[middle], guess_a, guess_b):
             right = middle
         else:
             left = middle + 1
@@ -420,15 +441,17 @@ def _threshold_search(a, count_a, b, count_b):
     memory stays O(n + m + 32k) plus those graphs however the points tie or cluster.
     """
     tree_a, tree_b = build(a), build(b)
+    guess_a = np.full(len(a), -1, np.int64)
+    guess_b = np.full(len(b), -1, np.int64)
     lo = max(_lower_bound(a, b, tree_b), _lower_bound(b, a, tree_a))
-    if _feasible(a, count_a, b, count_b, tree_a, tree_b, lo):
+    if _feasible(a, count_a, b, count_b, tree_a, tree_b, lo, guess_a, guess_b):
         return lo
     # Sending everything to the diagonal is feasible at the largest half-persistence.
     hi = max(np.max((a[:, 1] - a[:, 0]) / 2.0), np.max((b[:, 1] - b[:, 0]) / 2.0))
     # A feasible threshold within a factor 2 of an infeasible one.
     if lo == 0.0:  # every point has a copy across or lies on the diagonal
         start = hi * 2.0**-60
-        if _feasible(a, count_a, b, count_b, tree_a, tree_b, start):
+        if _feasible(a, count_a, b, count_b, tree_a, tree_b, start, guess_a, guess_b):
             hi = start
         else:
             lo = start
@@ -436,7 +459,7 @@ def _threshold_search(a, count_a, b, count_b):
         # Doubling, not faster: a feasible probe costs a graph as large as its
         # threshold's, so it should not overshoot the answer by more than 2.
         while 2.0 * lo < hi:
-            if _feasible(a, count_a, b, count_b, tree_a, tree_b, 2.0 * lo):
+            if _feasible(a, count_a, b, count_b, tree_a, tree_b, 2.0 * lo, guess_a, guess_b):
                 hi = 2.0 * lo
                 break
             lo *= 2.0
@@ -453,7 +476,7 @@ def _threshold_search(a, count_a, b, count_b):
         _pair_values(a, b, tree_b, lo, hi, count // _SAMPLE, sample)
         sample[_SAMPLE] = hi
         values = np.unique(sample)
-        found = _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values)
+        found = _first_feasible(a, count_a, b, count_b, tree_a, tree_b, values, guess_a, guess_b)
         below = np.searchsorted(values, found) - 1
         if below >= 0:
             lo = values[below]
@@ -464,7 +487,9 @@ def _threshold_search(a, count_a, b, count_b):
     _pair_values(a, b, tree_b, lo, hi, 1, values)
     values[count : count + len(diagonal)] = diagonal
     values[-1] = hi
-    return _first_feasible(a, count_a, b, count_b, tree_a, tree_b, np.unique(values))
+    return _first_feasible(
+        a, count_a, b, count_b, tree_a, tree_b, np.unique(values), guess_a, guess_b
+    )
 
 
 @numba.njit(cache=True)
@@ -490,7 +515,7 @@ def bottleneck_partners(a, b, t):
     sub_adj = np.empty(sub_ptr[-1], np.int64)
     for r in range(len(rows)):
         sub_adj[sub_ptr[r] : sub_ptr[r + 1]] = adj[ptr[rows[r]] : ptr[rows[r] + 1]]
-    _, sub_left, _ = _max_matching(sub_ptr, sub_adj, len(rows), m)
+    _, sub_left, _ = _max_matching(sub_ptr, sub_adj, len(rows), m, np.full(len(rows), -1))
     match_a = np.full(n, -1, np.int64)
     match_b = np.full(m, -1, np.int64)
     for r in range(len(rows)):
