@@ -215,6 +215,9 @@ def main():
     parser.add_argument("--quick", action="store_true", help="per-pair sizes up to 1000")
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--clustered-only", action="store_true", help="only table 3")
+    parser.add_argument(
+        "--pot-up-to", type=int, default=10000, help="largest n for POT in table 3 (0: none)"
+    )
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     if not args.clustered_only:
@@ -222,7 +225,7 @@ def main():
         per_pair(sizes, rng)
         full_matrix(300, rng, args.n_jobs)
     clustered_sizes = (1000, 2000) if args.quick else (1000, 2000, 5000, 10000, 20000)
-    clustered_table(clustered_sizes, pot_up_to=10000)
+    clustered_table(clustered_sizes, pot_up_to=args.pot_up_to)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak resident memory: {peak:.0f} MB")
 
