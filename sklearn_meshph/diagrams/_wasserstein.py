@@ -664,8 +664,8 @@ def _sparse_solve(a, b, da, db, order, internal_p, inv_scale, cap):
     """The optimal assignment of large diagrams in O((n + m) k) memory.
 
     Each point of ``a`` starts with its ``NEIGHBOURS`` nearest points of ``b`` (a 2-d
-    tree: clusters and shared births cost nothing more than spread points); the sparse
-    problem is solved, and every missing pair whose reduced cost under the optimal
+    tree: clusters and shared births cost nothing more than spread points) and its rank
+    windows (:func:`_add_rank_window`); the sparse problem is solved, and every missing pair whose reduced cost under the optimal
     potentials is negative is priced in (the most negative ones per row first) and the
     problem solved again. When no pair is left with a negative reduced cost, the
     potentials are feasible for the full problem and the sparse optimum is the optimum
