@@ -665,13 +665,13 @@ def _sparse_solve(a, b, da, db, order, internal_p, inv_scale, cap):
 
     Each point of ``a`` starts with its ``NEIGHBOURS`` nearest points of ``b`` (a 2-d
     tree: clusters and shared births cost nothing more than spread points) and its rank
-    windows (:func:`_add_rank_window`); the sparse problem is solved, and every missing pair whose reduced cost under the optimal
-    potentials is negative is priced in (the most negative ones per row first) and the
-    problem solved again. When no pair is left with a negative reduced cost, the
-    potentials are feasible for the full problem and the sparse optimum is the optimum
-    (linear programming duality: the assignment polytope is integral). ``tol`` is a
-    few hundred ulps of the largest potential: a pair violated by less cannot lower the
-    total by more than rounding already does.
+    windows (:func:`_add_rank_window`); the sparse problem is solved, and every missing
+    pair whose reduced cost under the optimal potentials is negative is priced in (the
+    most negative ones per row first) and the problem solved again. When no pair is
+    left with a negative reduced cost, the potentials are feasible for the full problem
+    and the sparse optimum is the optimum (linear programming duality: the assignment
+    polytope is integral). ``tol`` is a few hundred ulps of the largest potential: a
+    pair violated by less cannot lower the total by more than rounding already does.
     """
     n, m = len(a), len(b)
     tree = build(b)
