@@ -1,6 +1,6 @@
 """Pieces shared by the assignment solvers: augmenting an alternating path, a binary
-heap, a total order on diagrams that fixes the orientation of a pair, and the
-collapse of duplicated points into multiplicities."""
+heap, a total order on diagrams that fixes the orientation of a pair, the transpose of
+an edge list, and the collapse of duplicated points into multiplicities."""
 
 from __future__ import annotations
 
@@ -93,3 +93,25 @@ def collapse(d):
         of[i] = k
         count[k] += 1
     return distinct[: k + 1].copy(), of, count[: k + 1].copy()
+
+
+@numba.njit(cache=True)
+def transpose(ptr, cols, n_cols):
+    """The columns' side of a CSR edge list: ``(row_of, t_ptr, t_edge)``, the row of each
+    edge and, for column ``j``, its edges ``t_edge[t_ptr[j]:t_ptr[j + 1]]`` in increasing
+    order (so their rows are in increasing order too)."""
+    n_edges = len(cols)
+    row_of = np.empty(n_edges, np.int64)
+    for r in range(len(ptr) - 1):
+        row_of[ptr[r] : ptr[r + 1]] = r
+    t_ptr = np.zeros(n_cols + 1, np.int64)
+    for e in range(n_edges):
+        t_ptr[cols[e] + 1] += 1
+    for j in range(n_cols):
+        t_ptr[j + 1] += t_ptr[j]
+    t_edge = np.empty(n_edges, np.int64)
+    fill = t_ptr[:-1].copy()
+    for e in range(n_edges):
+        t_edge[fill[cols[e]]] = e
+        fill[cols[e]] += 1
+    return row_of, t_ptr, t_edge

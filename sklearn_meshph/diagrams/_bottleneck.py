@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._assignment import DIAGONAL, augment, collapse
+from ._assignment import DIAGONAL, augment, collapse, transpose
 from ._kdtree import STACK, build, nearest, within
 
 
@@ -141,19 +141,7 @@ def _max_flow(ptr, adj, demand, capacity):
     flow; each path carries as much as it can, so the number of searches depends on the
     distinct points, not on their copies."""
     n_rows, n_cols, n_edges = len(demand), len(capacity), len(adj)
-    row_of = np.empty(n_edges, np.int64)
-    for r in range(n_rows):
-        row_of[ptr[r] : ptr[r + 1]] = r
-    t_ptr = np.zeros(n_cols + 1, np.int64)
-    for e in range(n_edges):
-        t_ptr[adj[e] + 1] += 1
-    for j in range(n_cols):
-        t_ptr[j + 1] += t_ptr[j]
-    t_edge = np.empty(n_edges, np.int64)
-    fill = t_ptr[:-1].copy()
-    for e in range(n_edges):
-        t_edge[fill[adj[e]]] = e
-        fill[adj[e]] += 1
+    row_of, t_ptr, t_edge = transpose(ptr, adj, n_cols)
     flow = np.zeros(n_edges, np.int64)
     sent = np.zeros(n_rows, np.int64)
     taken = np.zeros(n_cols, np.int64)
@@ -523,17 +511,8 @@ def bottleneck_partners(a, b, t):
             match_a[rows[r]] = sub_left[r]
             match_b[sub_left[r]] = rows[r]
     # Transpose: the points of a near each point of b.
-    t_ptr = np.zeros(m + 1, np.int64)
-    for e in range(len(adj)):
-        t_ptr[adj[e] + 1] += 1
-    for j in range(m):
-        t_ptr[j + 1] += t_ptr[j]
-    t_adj = np.empty(len(adj), np.int64)
-    fill = t_ptr[:-1].copy()
-    for i in range(n):
-        for e in range(ptr[i], ptr[i + 1]):
-            t_adj[fill[adj[e]]] = i
-            fill[adj[e]] += 1
+    row_of, t_ptr, t_edge = transpose(ptr, adj, m)
+    t_adj = row_of[t_edge]
     seen = np.zeros(n, np.bool_)
     via = np.empty(n, np.int64)
     queue = np.empty(m, np.int64)

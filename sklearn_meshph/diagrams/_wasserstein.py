@@ -18,7 +18,15 @@ import math
 import numba
 import numpy as np
 
-from ._assignment import DIAGONAL, augment, collapse, heap_pop, heap_push, precedes
+from ._assignment import (
+    DIAGONAL,
+    augment,
+    collapse,
+    heap_pop,
+    heap_push,
+    precedes,
+    transpose,
+)
 from ._bottleneck import bottleneck_finite
 from ._kdtree import STACK, box_gap, build, ground, nearest, node_maxima
 
@@ -209,19 +217,7 @@ def _min_cost_flow(ptr, cols, costs, supply, capacity, n):
     """
     n_edges = len(cols)
     n_cols = len(capacity)
-    row_of = np.empty(n_edges, np.int64)
-    for i in range(n):
-        row_of[ptr[i] : ptr[i + 1]] = i
-    t_ptr = np.zeros(n_cols + 1, np.int64)
-    for e in range(n_edges):
-        t_ptr[cols[e] + 1] += 1
-    for j in range(n_cols):
-        t_ptr[j + 1] += t_ptr[j]
-    t_edge = np.empty(n_edges, np.int64)
-    fill = t_ptr[:-1].copy()
-    for e in range(n_edges):
-        t_edge[fill[cols[e]]] = e
-        fill[cols[e]] += 1
+    row_of, t_ptr, t_edge = transpose(ptr, cols, n_cols)
     flow = np.zeros(n_edges, np.int64)
     inflow = np.zeros(n_cols, np.int64)
     remaining = supply.copy()
