@@ -11,7 +11,22 @@ from sklearn.utils.validation import validate_data
 
 from ._param_validation import check_params
 
-__all__ = ["SampleTransformer", "as_sample_list"]
+__all__ = ["SampleTransformer", "as_sample_list", "median_scale"]
+
+OUTPUTS = ("default", "pandas", "polars")
+
+
+def median_scale(matrix) -> float:
+    """The median normalization of a distance matrix among the fitted samples.
+
+    The median of its positive finite off-diagonal entries (a median ignores the
+    outliers that a maximum or a mean would follow), or 1 when there is none: a
+    matrix that separates no fitted pair adds nothing whatever it is divided by.
+    """
+    matrix = np.asarray(matrix, dtype=np.float64)
+    off = matrix[~np.eye(*matrix.shape, dtype=bool)]
+    off = off[np.isfinite(off) & (off > 0)]
+    return float(np.median(off)) if off.size else 1.0
 
 
 def as_sample_list(X, what: str = "meshes") -> list:
@@ -49,6 +64,33 @@ class SampleTransformer(TransformerMixin, BaseEstimator):
 
     def _check_params(self) -> None:
         check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
+
+    def set_output(self, *, transform=None):
+        """Set the output container of ``transform`` and ``fit_transform``.
+
+        A transformer whose output is a table (it has ``get_feature_names_out``)
+        returns a DataFrame after ``set_output(transform="pandas")``. The others return
+        samples that are not rows (scalar fields, diagrams) and keep them as they are:
+        they accept the call so that :meth:`sklearn.pipeline.Pipeline.set_output`, which
+        configures every step, works on a pipeline that passes through them.
+
+        Parameters
+        ----------
+        transform : {"default", "pandas", "polars"}, default=None
+            The container of tabular output; ``None`` leaves it unchanged.
+
+        Returns
+        -------
+        self
+        """
+        if transform is None:
+            return self
+        if transform not in OUTPUTS:
+            raise ValueError(f"transform must be one of {OUTPUTS} or None, got {transform!r}")
+        if not hasattr(self, "_sklearn_output_config"):
+            self._sklearn_output_config = {}
+        self._sklearn_output_config["transform"] = transform
+        return self
 
     def _check_samples(self, X) -> list:
         return as_sample_list(X, self._sample_kind)

@@ -3,19 +3,23 @@ weighted combinations of several distance matrices."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from numbers import Integral
+import math
+from collections.abc import Mapping, Sequence
+from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator, TransformerMixin, clone
+from sklearn.base import BaseEstimator, ClassNamePrefixFeaturesOutMixin, TransformerMixin, clone
 from sklearn.metrics import pairwise_distances
+from sklearn.utils import get_tags
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._param_validation import check_params
+from ._base import median_scale
+from ._param_validation import Interval, Options, check_params
 
 __all__ = ["CombinedDistance", "FeatureDistance"]
 
 NORMALIZATIONS = ("median", "none")
+_NON_NEGATIVE = Interval(Real, 0, None, closed="left")
 
 
 def _reusable(X):
@@ -26,7 +30,7 @@ def _reusable(X):
     return X if hasattr(X, "__len__") and hasattr(X, "__getitem__") else list(X)
 
 
-class FeatureDistance(TransformerMixin, BaseEstimator):
+class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
     """Distances between feature vectors, as a precomputed-metric stage.
 
     The vector counterpart of :class:`DiagramDistance`: ``fit`` stores the rows of
@@ -50,11 +54,18 @@ class FeatureDistance(TransformerMixin, BaseEstimator):
     features_ : ndarray of shape (n_fitted, n_features)
         The fitted rows.
     n_features_in_ : int
+    feature_names_in_ : ndarray of str
+        The columns of a fitted DataFrame (only when fitted on one).
 
     See Also
     --------
     ShapeDNA : Spectra as feature vectors.
     DiagramDistance : Distances between persistence diagrams.
+
+    Notes
+    -----
+    The output's columns are named ``featuredistance0``, ``featuredistance1``... after
+    the fitted rows (:meth:`get_feature_names_out`, ``set_output(transform="pandas")``).
 
     Examples
     --------
@@ -101,8 +112,56 @@ class FeatureDistance(TransformerMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)
         return pairwise_distances(X, self.features_, metric=self.metric, n_jobs=self.n_jobs)
 
+    @property
+    def _n_features_out(self):
+        """The number of output columns: one per fitted row."""
+        return len(self.features_)
 
-class CombinedDistance(TransformerMixin, BaseEstimator):
+
+class _Weights:
+    """Constraint of ``CombinedDistance.weights``: finite non-negative numbers, by name
+    or one per part."""
+
+    def __call__(self, value) -> bool:
+        if isinstance(value, Mapping):
+            if not all(isinstance(name, str) for name in value):
+                return False
+            values = list(value.values())
+        elif isinstance(value, Sequence | np.ndarray) and not isinstance(value, str):
+            values = list(np.ravel(value)) if isinstance(value, np.ndarray) else list(value)
+        else:
+            return False
+        return all(_NON_NEGATIVE(w) and math.isfinite(w) for w in values)
+
+    def __str__(self) -> str:
+        return (
+            "a dict of part names to finite non-negative numbers, or a sequence of them "
+            "(one per part)"
+        )
+
+
+class _NamedParts:
+    """Constraint of ``CombinedDistance.transformer_list``."""
+
+    def __call__(self, value) -> bool:
+        if not isinstance(value, list | tuple) or not value:
+            return False
+        if not all(isinstance(p, tuple | list) and len(p) == 2 for p in value):
+            return False
+        names = [name for name, _ in value]
+        return (
+            all(isinstance(name, str) and name and "__" not in name for name in names)
+            and len(set(names)) == len(names)
+            and all(
+                hasattr(part, "fit_transform") and hasattr(part, "transform") for _, part in value
+            )
+        )
+
+    def __str__(self) -> str:
+        return "a non-empty list of (name, transformer) pairs with distinct names without '__'"
+
+
+class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
     """A weighted sum of the distance matrices of several parts, each normalized.
 
     Each part is a transformer (usually a :class:`~sklearn.pipeline.Pipeline`) that maps
@@ -119,21 +178,38 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
     transformer_list : list of (str, transformer)
         The named parts. Their parameters are reachable as ``<name>__<parameter>``, for
         ``set_params`` and grid searches.
-    weights : dict of str to float, default=None
-        Weight of each part (by name; missing parts weigh 1). ``None``: all 1.
+    weights : dict of str to float, sequence of float or None, default=None
+        Weight of each part, finite and non-negative: by name (missing parts weigh 1;
+        a name that is not a part's is refused by ``fit``), or one per part in the
+        order of ``transformer_list``. ``None``: all 1.
     normalization : {"median", "none"}, default="median"
-        ``"median"`` divides each part by the median of its finite off-diagonal
-        distances on the fitted samples, learned by ``fit``: parts measured in different
-        units (a bottleneck distance of unit-area eigenfunctions, a sum of relative
-        eigenvalue differences) then weigh alike at weight 1, whatever their scales, and
-        the median ignores the outliers that a maximum or a mean would follow. A part
-        with no positive distance among the fitted samples is divided by 1.
-        ``"none"`` adds the raw matrices.
+        ``"median"`` divides each part by the median of its positive finite
+        off-diagonal distances on the fitted samples, learned by ``fit``: parts measured
+        in different units (a bottleneck distance of unit-area eigenfunctions, a sum of
+        relative eigenvalue differences) then weigh alike at weight 1, whatever their
+        scales, and the median ignores the outliers that a maximum or a mean would
+        follow. A part with no positive distance among the fitted samples is divided by
+        1. ``"none"`` adds the raw matrices.
 
     Attributes
     ----------
+    parts_ : list of (str, transformer)
+        The fitted clones of the parts; ``transform`` uses these, never the parts of
+        ``transformer_list`` (which ``fit`` leaves unfitted).
+    weights_ : dict of str to float
+        The weight of each part at ``fit``.
     scales_ : dict of str to float
         The divisor of each part (1 with ``normalization="none"``).
+
+    Notes
+    -----
+    ``transform`` reads the fitted state only: parameters set after ``fit`` (weights,
+    parts, their parameters) take effect at the next ``fit``. ``set_params`` applies
+    its arguments in a fixed order whatever the order of the keywords: a new
+    ``transformer_list`` first, then parts replaced by name, then the other parameters
+    and the parts' own (``<name>__<parameter>``), so that nested parameters reach the
+    parts given in the same call. The output's columns are named ``combineddistance0``,
+    ``combineddistance1``... after the fitted samples (:meth:`get_feature_names_out`).
 
     Examples
     --------
@@ -150,61 +226,80 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
            [6., 4., 0.]])
     """
 
+    _parameter_constraints: dict = {
+        "transformer_list": [_NamedParts()],
+        "weights": [_Weights(), None],
+        "normalization": [Options(NORMALIZATIONS)],
+    }
+
     def __init__(self, transformer_list, weights=None, normalization="median"):
         self.transformer_list = transformer_list
         self.weights = weights
         self.normalization = normalization
 
     def get_params(self, deep=True):
-        """Parameters, with those of the parts as ``<name>__<parameter>`` when ``deep``."""
+        """Parameters, with those of the parts as ``<name>__<parameter>`` when ``deep``.
+
+        Parameters
+        ----------
+        deep : bool, default=True
+            Whether to list the parts and their parameters too.
+
+        Returns
+        -------
+        dict
+        """
         params = super().get_params(deep=False)
         if deep:
             for name, part in self.transformer_list:
                 params[name] = part
-                params.update({f"{name}__{k}": v for k, v in part.get_params(deep=True).items()})
+                if hasattr(part, "get_params"):
+                    nested = part.get_params(deep=True).items()
+                    params.update({f"{name}__{key}": value for key, value in nested})
         return params
 
     def set_params(self, **params):
-        """Set parameters, of the parts too (``<name>__<parameter>``, or ``<name>`` to
-        replace a part)."""
-        parts = dict(self.transformer_list)
-        nested: dict = {}
-        for key, value in params.items():
-            name, _, rest = key.partition("__")
-            if name in parts and rest:
-                nested.setdefault(name, {})[rest] = value
-            elif name in parts:
-                parts[name] = value
-            else:
-                super().set_params(**{key: value})
-                parts = dict(self.transformer_list)
-        for name, values in nested.items():
-            parts[name].set_params(**values)
-        self.transformer_list = [(name, parts[name]) for name, _ in self.transformer_list]
-        return self
+        """Set parameters, of the parts too, in an order that does not depend on the
+        keywords': ``transformer_list``, then parts by name (``<name>``), then the rest
+        (``weights``, ``normalization``, ``<name>__<parameter>``).
 
-    def _check(self) -> None:
-        check_params(
-            {"weights": [dict, None], "normalization": [str]},
-            {"weights": self.weights, "normalization": self.normalization},
-            "CombinedDistance",
-        )
-        if self.normalization not in NORMALIZATIONS:
-            raise ValueError(
-                f"normalization must be one of {NORMALIZATIONS}, got {self.normalization!r}"
-            )
+        Parameters
+        ----------
+        **params : dict
+
+        Returns
+        -------
+        self
+        """
+        if "transformer_list" in params:
+            self.transformer_list = params.pop("transformer_list")
+        names = {name for name, _ in self.transformer_list}
+        replaced = {key: params.pop(key) for key in list(params) if key in names}
+        if replaced:
+            self.transformer_list = [
+                (name, replaced.get(name, part)) for name, part in self.transformer_list
+            ]
+        return super().set_params(**params)
+
+    def _fitted_weights(self) -> dict:
+        """The weight of each part by name, checked against the parts."""
         names = [name for name, _ in self.transformer_list]
-        if not names or len(set(names)) != len(names) or any("__" in n for n in names):
-            raise ValueError(f"transformer_list needs distinct names without '__', got {names}")
-        unknown = set(self.weights or ()) - set(names)
-        if unknown:
-            raise ValueError(f"weights name unknown parts {sorted(unknown)}; parts: {names}")
+        if self.weights is None:
+            return dict.fromkeys(names, 1.0)
+        if isinstance(self.weights, Mapping):
+            unknown = set(self.weights) - set(names)
+            if unknown:
+                raise ValueError(f"weights name unknown parts {sorted(unknown)}; parts: {names}")
+            return {name: float(self.weights.get(name, 1.0)) for name in names}
+        weights = np.ravel(self.weights)
+        if len(weights) != len(names):
+            raise ValueError(f"weights holds {len(weights)} numbers for {len(names)} parts {names}")
+        return {name: float(w) for name, w in zip(names, weights, strict=True)}
 
     def _combine(self, matrices):
-        weights = self.weights or {}
         total = None
-        for (name, _), matrix in zip(self.transformer_list, matrices, strict=True):
-            term = float(weights.get(name, 1.0)) / self.scales_[name] * np.asarray(matrix, float)
+        for (name, _), matrix in zip(self.parts_, matrices, strict=True):
+            term = self.weights_[name] / self.scales_[name] * np.asarray(matrix, float)
             total = term if total is None else total + term
         return total
 
@@ -221,23 +316,19 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
         -------
         ndarray of shape (n_samples, n_samples)
         """
-        self._check()
+        check_params(self._parameter_constraints, self.get_params(deep=False), "CombinedDistance")
+        weights = self._fitted_weights()
         X = _reusable(X)  # every part reads X: a generator is read once
-        self.parts_ = [(name, clone(part)) for name, part in self.transformer_list]
-        matrices = [part.fit_transform(X) for _, part in self.parts_]
-        self.scales_ = {}
-        for (name, _), matrix in zip(self.parts_, matrices, strict=True):
-            self.scales_[name] = self._scale(np.asarray(matrix, float))
-        return self._combine(matrices)
-
-    def _scale(self, matrix) -> float:
-        if self.normalization == "none":
-            return 1.0
-        off = matrix[~np.eye(*matrix.shape, dtype=bool)] if matrix.ndim == 2 else matrix
-        finite = off[np.isfinite(off) & (off > 0)]
-        # A part that tells no fitted pair apart (e.g. essential H1 on genus-0 shapes
-        # only) adds nothing: any divisor will do.
-        return float(np.median(finite)) if finite.size else 1.0
+        parts = [(name, clone(part)) for name, part in self.transformer_list]
+        matrices = [part.fit_transform(X) for _, part in parts]
+        self.parts_, self.weights_ = parts, weights
+        self.scales_ = {
+            name: median_scale(matrix) if self.normalization == "median" else 1.0
+            for (name, _), matrix in zip(parts, matrices, strict=True)
+        }
+        combined = self._combine(matrices)
+        self._n_features_out = combined.shape[1]
+        return combined
 
     def fit(self, X, y=None):
         """Fit every part on ``X`` and learn its normalization.
@@ -273,5 +364,8 @@ class CombinedDistance(TransformerMixin, BaseEstimator):
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
-        tags.input_tags.two_d_array = False
+        parts = self.transformer_list if isinstance(self.transformer_list, list | tuple) else ()
+        tags.input_tags.two_d_array = bool(parts) and all(
+            get_tags(part).input_tags.two_d_array for _, part in parts
+        )
         return tags
