@@ -27,7 +27,7 @@ from sklearn_meshph.mesh._geometry import (
     first_of_duplicate_faces,
     nondegenerate_faces,
 )
-from sklearn_meshph.mesh._graph import connected_components
+from sklearn_meshph.mesh.graph import connected_components
 
 
 def irregular_sphere(subdivisions, seed=0):

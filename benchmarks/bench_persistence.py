@@ -27,7 +27,7 @@ import numpy as np
 import trimesh
 from _common import median_time, peak_memory
 
-from sklearn_meshph.mesh._graph import mesh_edges as edge_adjacency
+from sklearn_meshph.mesh.graph import mesh_edges as edge_adjacency
 from sklearn_meshph.persistence.lower_star import sublevel_h0
 
 FILTRATIONS = ("sublevel", "extended", "symmetric")

@@ -15,7 +15,7 @@ from ._geometry import (
     first_of_duplicate_faces,
     nondegenerate_faces,
 )
-from ._graph import connected_components
+from .graph import connected_components
 from .validation import check_mesh, where
 from .welding import WELD_RTOL, weld_vertices
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._graph import connected_components
+from .graph import connected_components
 
 __all__ = ["WELD_RTOL", "weld_vertices"]
 

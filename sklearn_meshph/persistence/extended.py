@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..mesh._graph import closed_surface_edges, connected_components, find_root
+from ..mesh.graph import closed_surface_edges, connected_components, find_root
 
 __all__ = ["closed_surface", "essential_h1_pairs"]
 

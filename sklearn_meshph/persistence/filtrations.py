@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._registry import Option, Registry
-from ..mesh._graph import connected_components
+from ..mesh.graph import connected_components
 from .extended import essential_h1_pairs
 from .lower_star import sublevel_h0
 

@@ -6,7 +6,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh._graph import find_root, mesh_edges
+from ..mesh.graph import find_root, mesh_edges
 from ..mesh.validation import check_values
 from ..pointcloud.graph import edge_adjacency, knn_graph
 from ..pointcloud.validation import check_input
@@ -67,7 +67,7 @@ def _union_find_h0(values, order, indptr, indices):
 def sublevel_h0(adjacency: sp.csr_matrix, values: np.ndarray):
     """Finite H0 pairs ``(n, 2)``, essential births ``(c,)`` and the component roots.
 
-    ``adjacency`` is :func:`..mesh._graph.mesh_edges` of the mesh; ``values`` a finite
+    ``adjacency`` is :func:`sklearn_meshph.mesh.graph.mesh_edges` of the mesh; ``values`` a finite
     contiguous float64 vector.
     """
     order = np.argsort(values, kind="stable").astype(adjacency.indices.dtype, copy=False)

@@ -11,7 +11,7 @@ from joblib import delayed
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
 from .._progress import parallel, track
-from ..mesh._graph import mesh_edges
+from ..mesh.graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
 from ..mesh.validation import check_values, where
 from ..pointcloud.graph import edge_adjacency, knn_graph

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh._graph import connected_components
 from ..mesh.cleaning import CleaningReport, CleanMesh
+from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, weld_vertices
 from .graph import canonical_order

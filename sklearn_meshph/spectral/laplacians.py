@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
-from ..mesh._graph import edge_matrix_csr, mesh_edges
+from ..mesh.graph import edge_matrix_csr, mesh_edges
 from ..mesh.validation import check_faces, check_vertices
 from ._assembly import cotangent_weights
 
