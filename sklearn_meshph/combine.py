@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from numbers import Integral, Real
 
 import numpy as np
+from scipy.sparse import issparse
 from sklearn.base import BaseEstimator, ClassNamePrefixFeaturesOutMixin, TransformerMixin, clone
 from sklearn.metrics import pairwise_distances
 from sklearn.utils import get_tags
@@ -23,11 +24,16 @@ _NON_NEGATIVE = Interval(Real, 0, None, closed="left")
 
 
 def _reusable(X):
-    """``X`` itself when it can be read several times (arrays, lists...), else a list
-    of it (a generator or another one-shot iterator)."""
+    """``X`` itself when it can be read several times (arrays, sparse matrices, lists...),
+    else an array of it (an array-like) or a list of it (a generator or another one-shot
+    iterator)."""
+    if issparse(X):
+        return X  # the parts accept it or refuse it by name
     if isinstance(X, Mapping):
         raise TypeError(f"X must be a sequence of samples, got a {type(X).__name__}")
-    return X if hasattr(X, "__len__") and hasattr(X, "__getitem__") else list(X)
+    if hasattr(X, "__len__") and hasattr(X, "__getitem__"):
+        return X
+    return np.asarray(X) if hasattr(X, "__array__") else list(X)
 
 
 class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
@@ -143,10 +149,14 @@ class _Weights:
 class _NamedParts:
     """Constraint of ``CombinedDistance.transformer_list``."""
 
+    @staticmethod
+    def is_list_of_pairs(value) -> bool:
+        return isinstance(value, list | tuple) and all(
+            isinstance(pair, tuple | list) and len(pair) == 2 for pair in value
+        )
+
     def __call__(self, value) -> bool:
-        if not isinstance(value, list | tuple) or not value:
-            return False
-        if not all(isinstance(p, tuple | list) and len(p) == 2 for p in value):
+        if not value or not self.is_list_of_pairs(value):
             return False
         names = [name for name, _ in value]
         return (
@@ -159,6 +169,14 @@ class _NamedParts:
 
     def __str__(self) -> str:
         return "a non-empty list of (name, transformer) pairs with distinct names without '__'"
+
+
+def _named(transformer_list) -> list:
+    """The (name, part) pairs of ``transformer_list``; none when it is not a list of
+    pairs (``fit`` refuses it by name; ``get_params`` must not fail before)."""
+    if _NamedParts.is_list_of_pairs(transformer_list):
+        return list(transformer_list)
+    return []
 
 
 class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
@@ -251,7 +269,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         params = super().get_params(deep=False)
         if deep:
-            for name, part in self.transformer_list:
+            for name, part in _named(self.transformer_list):
                 params[name] = part
                 if hasattr(part, "get_params"):
                     nested = part.get_params(deep=True).items()
@@ -273,13 +291,24 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         if "transformer_list" in params:
             self.transformer_list = params.pop("transformer_list")
-        names = {name for name, _ in self.transformer_list}
+        names = {name for name, _ in _named(self.transformer_list)}
         replaced = {key: params.pop(key) for key in list(params) if key in names}
         if replaced:
             self.transformer_list = [
                 (name, replaced.get(name, part)) for name, part in self.transformer_list
             ]
         return super().set_params(**params)
+
+    @property
+    def n_features_in_(self):
+        """The number of features of the fitted samples, as the first part saw them
+        (when it counts them)."""
+        return self.parts_[0][1].n_features_in_
+
+    @property
+    def feature_names_in_(self):
+        """The columns of the fitted DataFrame, as the first part saw them."""
+        return self.parts_[0][1].feature_names_in_
 
     def _fitted_weights(self) -> dict:
         """The weight of each part by name, checked against the parts."""
@@ -364,7 +393,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
-        parts = self.transformer_list if isinstance(self.transformer_list, list | tuple) else ()
+        parts = _named(self.transformer_list)
         tags.input_tags.two_d_array = bool(parts) and all(
             get_tags(part).input_tags.two_d_array for _, part in parts
         )
