@@ -13,6 +13,7 @@ from sklearn_meshph import (
     ShapeDNA,
     SlicedWassersteinKernel,
 )
+from sklearn_meshph.inputs import KINDS, check_input, sample_kind
 
 MESHES = [irregular_ellipsoid(1, seed=s) for s in range(3)]
 DIAGRAMS = [np.array([[0.0, 1.0], [0.2, 0.5]]), np.array([[0.1, 0.9]]), np.empty((0, 2))]
@@ -61,3 +62,28 @@ def test_a_dict_or_a_single_sample_is_refused_with_a_clear_message(estimator):
         estimator.fit({"a": MESHES[0], "b": MESHES[1]})
     with pytest.raises(TypeError, match="single str"):
         estimator.fit("meshes/")
+
+
+# The kind of a sample is decided in one place: sklearn_meshph.inputs
+
+
+def test_check_input_decides_the_kind_of_every_sample(tmp_path):
+    vertices, faces = MESHES[0]
+    trimesh = pytest.importorskip("trimesh")
+    np.savetxt(tmp_path / "scan.xyz", vertices)
+    trimesh.Trimesh(vertices, faces, process=False).export(tmp_path / "mesh.ply")
+    clouds = [vertices, trimesh.PointCloud(vertices), tmp_path / "scan.xyz"]
+    meshes = [(vertices, faces), trimesh.Trimesh(vertices, faces, process=False)]
+    meshes.append(tmp_path / "mesh.ply")
+    for sample in clouds:
+        assert sample_kind(sample) == "point cloud"
+        points, no_faces = check_input(sample, index=2)
+        assert no_faces is None and points.shape == vertices.shape
+    for sample in meshes:
+        assert sample_kind(sample) == "mesh"
+        np.testing.assert_array_equal(check_input(sample)[1], faces)
+    assert [kind.name for kind in KINDS] == ["point cloud", "mesh"]
+    with pytest.raises(TypeError, match="sample 4: expected a trimesh.Trimesh.*point cloud"):
+        check_input(42, index=4)
+    with pytest.raises(ValueError, match="sample 1: a point cloud needs at least 4 points"):
+        check_input(vertices[:3], index=1)

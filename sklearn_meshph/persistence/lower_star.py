@@ -6,10 +6,10 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from ..inputs import check_input
 from ..mesh.graph import find_root, mesh_edges
 from ..mesh.validation import check_values
 from ..pointcloud.graph import edge_adjacency, knn_graph
-from ..pointcloud.validation import check_input
 
 __all__ = ["lower_star_persistence", "sublevel_h0"]
 

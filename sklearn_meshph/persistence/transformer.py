@@ -11,11 +11,11 @@ from joblib import delayed
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
 from .._progress import parallel, track
+from ..inputs import check_input
 from ..mesh.graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
 from ..mesh.validation import check_values, where
 from ..pointcloud.graph import edge_adjacency, knn_graph
-from ..pointcloud.validation import check_input
 from .extended import closed_surface
 from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
 

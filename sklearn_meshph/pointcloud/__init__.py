@@ -1,10 +1,11 @@
 """Point clouds as input: the same pipeline as meshes, on scans without connectivity.
 
-- :mod:`.validation`: ``check_point_cloud``, and ``check_input``, the dispatch between
-  meshes and point clouds that every cloud-taking function goes through;
+- :mod:`.validation`: ``check_point_cloud`` (which samples are clouds is decided by
+  :mod:`sklearn_meshph.inputs`);
 - :mod:`.reading`: ``.xyz`` and ``.pts`` text files, and PLY files without faces;
-- :mod:`.cleaning`: the cleaning policy of clouds (coincident points merged, one
-  connected component), in a canonical point order;
+- :mod:`.cleaning`: the cleaning policy of clouds (coincident points merged, far and
+  weakly connected points dropped as other components, one connected component), in a
+  canonical point order;
 - :mod:`.laplacians`: ``point_cloud_laplacian`` (local Delaunay cotangent) and the
   registry ``CLOUD_LAPLACIANS``, one discretization per name of ``LAPLACIANS``;
 - :mod:`.graph`: the symmetric kNN graph that lower-star persistence filters;
