@@ -11,10 +11,12 @@ filtration or a metric to its registry is the only change the documentation need
 from pathlib import Path
 
 from sklearn_meshph._registry import update_tables
+from sklearn_meshph.pipelines import all_registries
 
+registries = all_registries()
 for page in sorted(Path(__file__).parent.glob("*.md")):
     text = page.read_text()
-    updated = update_tables(text)
+    updated = update_tables(text, registries)
     if updated != text:
         page.write_text(updated)
         print(f"updated {page}")

@@ -83,18 +83,16 @@ class HasMethods:
 
 
 def _is_random_state(value) -> bool:
-    return (
-        value is None
-        or isinstance(value, Integral | np.random.RandomState)
-        and not isinstance(value, bool)
-    )
+    if isinstance(value, Integral) and not isinstance(value, bool):
+        return 0 <= value < 2**32  # numpy's seeds
+    return value is None or isinstance(value, np.random.RandomState)
 
 
 def _describe(constraint) -> str:
     if constraint is None:
         return "None"
     if constraint == "random_state":
-        return "an int, a numpy.random.RandomState or None"
+        return "an int in [0, 2**32 - 1], a numpy.random.RandomState or None"
     if constraint == "boolean":
         return "a bool"
     if isinstance(constraint, type):

@@ -1,20 +1,25 @@
 """Ready-made pipelines from meshes to a precomputed distance matrix: the library's
-default, chosen by cross-validation, and the settings it is compared with."""
+default, chosen by cross-validation, and the settings it is compared with; and every
+option family of the package, for the documentation's tables."""
 
 from __future__ import annotations
 
+import os
 from numbers import Integral
 
 from sklearn.pipeline import Pipeline
 
-from ._param_validation import Interval, Options, validate_params
+from ._param_validation import HasMethods, Interval, Options, validate_params
 from ._registry import Option, Registry
 from .combine import CombinedDistance, FeatureDistance
 from .diagrams import DiagramDistance
+from .diagrams.distances import METRICS
 from .persistence import LowerStarPersistence
-from .spectral import LaplacianEigenTransformer, ShapeDNA
+from .persistence.filtrations import FILTRATIONS
+from .spectral import LAPLACIANS, SIGNATURES, SOLVERS, LaplacianEigenTransformer, ShapeDNA
+from .spectral.cache import cache_of
 
-__all__ = ["PRESETS", "make_mesh_distance"]
+__all__ = ["PRESETS", "all_registries", "make_mesh_distance"]
 
 # The extended-persistence diagrams of the default, by kind, and their weights.
 _KINDS = {
@@ -23,7 +28,6 @@ _KINDS = {
     "ext1": ("essential H1", 1.0),
 }
 _DNA_WEIGHT = 0.5
-_DNA_EIGENVALUES = 49
 _EIGENPAIRS = 50
 _SCALES = 5
 
@@ -65,7 +69,7 @@ def _default(common):
             "dna",
             Pipeline(
                 [
-                    ("spectrum", ShapeDNA(n_eigenvalues=_DNA_EIGENVALUES)),
+                    ("spectrum", ShapeDNA(n_eigenpairs=_EIGENPAIRS)),
                     ("distance", FeatureDistance(metric="canberra", n_jobs=n_jobs)),
                 ]
             ),
@@ -79,7 +83,7 @@ def _chain(eigen, persistence, distance):
     return eigen, Pipeline([("persistence", persistence), ("distance", distance)])
 
 
-def _v01(common):
+def _eigenfunctions(common):
     n_jobs, verbose = common["n_jobs"], common["verbose"]
     return _chain(
         LaplacianEigenTransformer(**common["eigen"]),
@@ -103,7 +107,7 @@ def _shape_dna(common):
     eigen = LaplacianEigenTransformer(signature="hks", n_eigenpairs=31, **common["eigen"])
     return eigen, Pipeline(
         [
-            ("spectrum", ShapeDNA(n_eigenvalues=30)),
+            ("spectrum", ShapeDNA(n_eigenpairs=31)),
             ("distance", FeatureDistance(metric="canberra", n_jobs=common["n_jobs"])),
         ]
     )
@@ -119,13 +123,14 @@ PRESETS = Registry(
             f"`log-hks` at {_SCALES} times from {_EIGENPAIRS} eigenpairs, extended "
             "persistence, W1 (Euclidean ground metric) per diagram kind, each time "
             "median-normalized, `ord1` + 0.5 `ext0` + `ext1` + 0.5 Shape-DNA "
-            f"({_DNA_EIGENVALUES} eigenvalues, Canberra)",
+            f"(the {_EIGENPAIRS - 1} non-zero eigenvalues, Canberra)",
         ),
         Option(
-            "0.1",
-            _v01,
-            "the estimators' own defaults (version 0.1's pipeline): eigenfunctions 1-3 "
-            "of the cotangent Laplacian at unit area, symmetric H0, bottleneck",
+            "eigenfunctions",
+            _eigenfunctions,
+            "the estimators' own defaults (version 0.1's pipeline, formerly named "
+            '`"0.1"`): eigenfunctions 1-3 of the cotangent Laplacian at unit area, '
+            "symmetric H0, bottleneck",
         ),
         Option(
             "paper",
@@ -140,19 +145,27 @@ PRESETS = Registry(
             "Canberra distance (sum of differences relative to their sums)",
         ),
     ],
+    aliases={"0.1": "eigenfunctions"},
 )
+
+
+def all_registries() -> dict[str, Registry]:
+    """Every option family, by name: what the documentation's tables are made from
+    (``python docs/update_tables.py``)."""
+    families = (LAPLACIANS, SOLVERS, SIGNATURES, FILTRATIONS, METRICS, PRESETS)
+    return {registry.family: registry for registry in families}
 
 
 @validate_params(
     {
-        "preset": [Options(PRESETS)],
-        "memory": [None, str, object],
+        "preset": [Options(PRESETS), Options(PRESETS.aliases)],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
-        "random_state": [Integral, None, object],
+        "random_state": ["random_state"],
         "verbose": [Interval(Integral, 0, None, closed="left")],
     }
 )
-def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_state=None, verbose=0):
+def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_state=0, verbose=0):
     """A pipeline from meshes to their precomputed distance matrix.
 
     Two steps, ``"eigen"`` (a :class:`LaplacianEigenTransformer`, one eigensolve per
@@ -166,27 +179,33 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
     Parameters
     ----------
     preset : str, default="default"
-        Which pipeline (the table of ``PRESETS``, also in the documentation):
+        Which pipeline (the table of ``PRESETS``, also in the documentation, with each
+        one's measured accuracy in ``docs/learning.md``):
 
         - ``"default"``: the library's best invariant configuration, chosen by
-          cross-validation on the development half of SHREC'07 Watertight (leave-one-out
-          1-NN 0.895 there, against 0.79 for the 30-eigenvalue Shape-DNA; see
-          ``benchmarks/learning_quality.py``). The scale-invariant heat kernel
-          signature ``log(HKS / heat trace)`` at 5 times, its extended persistence split
-          by kind (ordinary superlevel pairs, the components' ranges, the essential H1
-          classes of closed surfaces), 1-Wasserstein distances with each time's
-          distance divided by its median (the persistence of the signature shrinks with
-          the time), the kinds and the Shape-DNA spectrum added with weights
-          1, 0.5, 1 and 0.5 after median normalization (:class:`CombinedDistance`).
-        - ``"0.1"``: version 0.1's default, the three estimators at their defaults.
+          cross-validation on the development half of SHREC'07 Watertight. The
+          scale-invariant heat kernel signature ``log(HKS / heat trace)`` at 5 times
+          from 50 eigenpairs, its extended persistence split by kind (ordinary
+          superlevel pairs, the components' ranges, the essential H1 classes of closed
+          surfaces), 1-Wasserstein distances with each time's distance divided by its
+          median (the persistence of the signature shrinks with the time), the kinds
+          and the Shape-DNA spectrum of the same 50 eigenpairs added with weights 1,
+          0.5, 1 and 0.5 after median normalization (:class:`CombinedDistance`).
+        - ``"eigenfunctions"``: the three estimators at their own defaults
+          (eigenfunctions 1-3, version 0.1's default); ``"0.1"``, its former name, is
+          accepted with a ``FutureWarning``.
         - ``"paper"``: the paper's literal setting.
         - ``"shape-dna"``: the spectral baseline.
-    memory : str, joblib.Memory or None, default=None
-        Cache of the eigensolves (see :class:`LaplacianEigenTransformer`).
+    memory : str, path, joblib.Memory or None, default=None
+        Cache of the eigensolves (see :class:`LaplacianEigenTransformer`): with it, a
+        second call or a grid search over the pipeline's parameters solves each mesh
+        once. An empty path is refused.
     n_jobs : int, default=None
         Parallel jobs of every stage (joblib).
-    random_state : int, RandomState or None, default=None
-        Seed of the eigensolver's start vector.
+    random_state : int, RandomState or None, default=0
+        Seed of the eigensolver's start vector, part of the cache's key: the fixed
+        default makes results repeat and the cache hit; ``None`` draws a new start
+        vector per call (results differ by rounding only), so the cache never hits.
     verbose : int, default=0
         Progress bars of the stages that have them.
 
@@ -203,6 +222,7 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
     >>> make_mesh_distance("paper").named_steps["eigen"].laplacian
     'graph'
     """
+    cache_of(memory)  # refuses an empty path before anything runs
     common = {
         "eigen": {
             "memory": memory,
@@ -213,5 +233,5 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
         "n_jobs": n_jobs,
         "verbose": verbose,
     }
-    eigen, distance = PRESETS[preset].value(common)
+    eigen, distance = PRESETS[preset].value(common)  # a former name warns
     return Pipeline([("eigen", eigen), ("distance", distance)])

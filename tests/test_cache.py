@@ -154,3 +154,134 @@ def test_a_folder_that_cannot_be_made_degrades_to_computing(tmp_path):
         field = solve(blocked)
     reference = LaplacianEigenTransformer(random_state=0).fit_transform([MESH])[0]
     np.testing.assert_array_equal(field.values, reference.values)
+
+
+def within(seconds, function):
+    """``function()``, failing (instead of hanging) when it takes over ``seconds``."""
+    import threading
+
+    outcome = {}
+
+    def run():
+        try:
+            outcome["value"] = function()
+        except BaseException as error:  # re-raised in the test's thread
+            outcome["error"] = error
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(seconds)
+    assert not worker.is_alive(), f"no answer within {seconds} s: a hang"
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
+
+
+def _header(entry):
+    return json.loads((entry / "header.json").read_text())
+
+
+def _replace_with(path, kind, tmp_path):
+    """Put a FIFO, a folder or a symbolic link (to a copy) where the file ``path`` is."""
+    copy = tmp_path / f"elsewhere-{path.name}"
+    copy.write_bytes(path.read_bytes())
+    path.unlink()
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "folder":
+        path.mkdir()
+    else:  # a link to a perfectly good copy: still not a regular file of the entry
+        path.symlink_to(copy)
+
+
+TAMPERED_HEADERS = {
+    "a string count": lambda h: {**h, "n_vertices": str(h["n_vertices"])},
+    "a float count": lambda h: {**h, "n_pairs": float(h["n_pairs"])},
+    "a list": lambda h: [h],
+    "a list report": lambda h: {**h, "report": list(h["report"].values())},
+    "a string in the report": lambda h: {**h, "report": {**h["report"], "n_welded": "0"}},
+}
+
+
+@pytest.mark.parametrize("damage", sorted(TAMPERED_HEADERS))
+def test_a_header_of_the_wrong_types_is_recomputed(tmp_path, damage):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    (entry / "header.json").write_text(json.dumps(TAMPERED_HEADERS[damage](_header(entry))))
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+    assert again.cleaning == first.cleaning
+
+
+@pytest.mark.parametrize("constant", ["Infinity", "-Infinity", "NaN"])
+@pytest.mark.parametrize("where", ["n_pairs", "area_share"])
+def test_json_constants_in_a_header_are_refused(tmp_path, constant, where):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    header = _header(entry)
+    if where == "n_pairs":
+        header["n_pairs"] = "@"
+    else:
+        header["report"]["area_share"] = "@"
+    text = json.dumps(header).replace('"@"', constant)
+    (entry / "header.json").write_text(text)
+    with pytest.warns(CacheWarning, match="unusable and is recomputed: the header holds"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+    assert again.cleaning == first.cleaning
+
+
+def test_a_deeply_nested_header_is_recomputed(tmp_path):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    depth = 30000  # under the header's size limit, far over the recursion limit
+    (entry / "header.json").write_text("[" * depth + "]" * depth)
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs and symbolic links")
+@pytest.mark.parametrize("kind", ["fifo", "folder", "link"])
+@pytest.mark.parametrize("name", ["header.json", "values.npy", "vectors.npy"])
+def test_only_regular_files_of_an_entry_are_opened(tmp_path, kind, name):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    _replace_with(entry / name, kind, tmp_path)
+    with pytest.warns(CacheWarning, match=f"unusable and is recomputed: {name} is not a regular"):
+        again = within(30, lambda: solve(tmp_path))
+    np.testing.assert_array_equal(again.values, first.values)
+    # The entry was replaced by a good one.
+    assert (entry / name).is_file() and not (entry / name).is_symlink()
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        np.testing.assert_array_equal(within(30, lambda: solve(tmp_path)).values, first.values)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs symbolic links")
+def test_an_entry_that_is_a_link_is_not_followed(tmp_path):
+    import shutil
+
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    elsewhere = tmp_path / "elsewhere"
+    shutil.move(entry, elsewhere)
+    entry.symlink_to(elsewhere, target_is_directory=True)
+    with pytest.warns(CacheWarning, match="unusable and is recomputed: not a folder"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+    assert entry.is_dir() and not entry.is_symlink()
+    assert (elsewhere / "header.json").exists()  # what the link pointed to is left alone
+
+
+@pytest.mark.parametrize("memory", [""])
+def test_an_empty_memory_path_is_refused(memory):
+    from sklearn_meshph import make_mesh_distance
+
+    with pytest.raises(ValueError, match="memory must be a folder.*got an empty path"):
+        LaplacianEigenTransformer(memory=memory).fit_transform([MESH])
+    with pytest.raises(ValueError, match="memory must be a folder.*got an empty path"):
+        make_mesh_distance(memory=memory)

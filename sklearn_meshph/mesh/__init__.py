@@ -6,10 +6,12 @@
 - :mod:`.welding`: ``weld_vertices``, one vertex per position (STL soups, OBJ seams);
 - :mod:`.cleaning`: ``clean_mesh``, the cleaning policy, and its report and warning;
 - :mod:`.scalar_field`: ``ScalarField``, the data passed between stages;
-- :mod:`._geometry`, :mod:`._graph`: compiled triangle geometry, union-find,
-  connected components and the edge adjacency.
+- :mod:`._geometry`: triangle geometry (``unit_box``, the frame every solve works in,
+  and compiled areas, angles, degenerate and repeated faces);
+- :mod:`.graph`: compiled union-find, connected components and the edge adjacency.
 """
 
+from ._geometry import smallest_angle_sines, unit_box
 from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
@@ -22,5 +24,7 @@ __all__ = [
     "ScalarField",
     "check_mesh",
     "clean_mesh",
+    "smallest_angle_sines",
+    "unit_box",
     "weld_vertices",
 ]

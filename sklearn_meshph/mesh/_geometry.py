@@ -1,9 +1,34 @@
-"""Compiled per-triangle geometry: edge vectors, areas, degenerate faces."""
+"""Triangle geometry in one place: the unit box every solve works in, and compiled
+per-triangle edge vectors, areas, smallest angles, degenerate and repeated faces."""
 
 from __future__ import annotations
 
 import numba
 import numpy as np
+
+__all__ = [
+    "face_double_areas",
+    "first_of_duplicate_faces",
+    "nondegenerate_faces",
+    "smallest_angle_sines",
+    "triangle",
+    "unit_box",
+]
+
+
+def unit_box(vertices: np.ndarray) -> tuple[np.ndarray, float]:
+    """``vertices`` moved and scaled into ``[-1, 1]^3``, and the length ``scale`` with
+    ``vertices ~ center + scale * unit``, computed without overflow or underflow for
+    any finite float64 coordinates (halves first, then one division), so that what
+    follows (areas, cotangents, the mass matrix) sees numbers near 1 whatever the
+    mesh's scale. A mesh of one point (no extent) is returned as it is."""
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    half = vertices / 2 - (lo / 2 + hi / 2) / 2
+    extent = float(np.abs(half).max()) if len(vertices) else 0.0
+    if not 0.0 < extent < np.inf:
+        return vertices, 1.0
+    return half / extent, 2.0 * extent
+
 
 # A face is degenerate when twice its area is below this fraction of its longest edge
 # squared: its vertices are (numerically) collinear or coincident, whatever the scale.
@@ -51,6 +76,31 @@ def nondegenerate_faces(vertices, faces, sine):
         longest = max(longest, wx * wx + wy * wy + wz * wz)
         keep[f] = double_area > sine * longest
     return keep
+
+
+def smallest_angle_sines(vertices, faces) -> np.ndarray:
+    """The sine of each face's smallest angle (0 for a degenerate face), for vertices
+    near unit scale (see :func:`unit_box`)."""
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    return _smallest_angle_sines(vertices, np.ascontiguousarray(faces, dtype=np.int64))
+
+
+@numba.njit(cache=True)
+def _smallest_angle_sines(vertices, faces):
+    """``sin(angle at a corner) = 2 area / (product of its two edges)``: the smallest
+    angle is at the corner whose two edges have the largest product."""
+    out = np.empty(faces.shape[0])
+    for f in range(faces.shape[0]):
+        ux, uy, uz, vx, vy, vz, double_area = triangle(
+            vertices, faces[f, 0], faces[f, 1], faces[f, 2]
+        )
+        wx, wy, wz = vx - ux, vy - uy, vz - uz
+        u = np.sqrt(ux * ux + uy * uy + uz * uz)
+        v = np.sqrt(vx * vx + vy * vy + vz * vz)
+        w = np.sqrt(wx * wx + wy * wy + wz * wz)
+        largest = max(u * v, u * w, v * w)
+        out[f] = double_area / largest if largest > 0.0 else 0.0
+    return out
 
 
 @numba.njit(cache=True, inline="always")

@@ -62,6 +62,12 @@ class ScalarField:
         Edges of the complex beyond those of the faces, as indices into ``vertices``:
         for a point cloud, its symmetric k-nearest-neighbour graph (see
         :class:`LaplacianEigenTransformer`). ``None`` means none.
+    column_names : tuple of str, optional
+        What each column of ``values`` is, for labels and legends:
+        :class:`LaplacianEigenTransformer` sets ``"eigenfunction 3"``, ``"heat kernel
+        signature t=0.0312"``, ``"log heat kernel signature t=..."`` or ``"wave kernel
+        signature e=..."``. ``None`` (the default) names them ``"function 0"``,
+        ``"function 1"``...
 
     Examples
     --------
@@ -70,8 +76,8 @@ class ScalarField:
     >>> tetra_v = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
     >>> tetra_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> field = ScalarField(tetra_v, tetra_f, tetra_v[:, 2])
-    >>> field.n_vertices, field.n_functions
-    (4, 1)
+    >>> field.n_vertices, field.n_functions, field.column_names
+    (4, 1, ('function 0',))
     """
 
     vertices: np.ndarray
@@ -83,6 +89,7 @@ class ScalarField:
     cleaning: CleaningReport | None = field(default=None, repr=False)
     spectrum: np.ndarray | None = field(default=None, repr=False)
     edges: np.ndarray | None = field(default=None, repr=False)
+    column_names: tuple[str, ...] | None = field(default=None, repr=False)
 
     def __post_init__(self):
         vertices = check_vertices(self.vertices, "ScalarField")
@@ -120,6 +127,17 @@ class ScalarField:
                     f"{len(vertices)} vertices or -1"
                 )
             object.__setattr__(self, "input_to_kept", _frozen(input_to_kept))
+        names = self.column_names
+        if names is None:
+            names = tuple(f"function {j}" for j in range(self.n_functions))
+        elif isinstance(names, str) or not all(isinstance(name, str) for name in names):
+            raise ValueError("ScalarField: column_names must be a sequence of str")
+        names = tuple(names)
+        if len(names) != self.n_functions:
+            raise ValueError(
+                f"ScalarField: {len(names)} column_names for {self.n_functions} columns"
+            )
+        object.__setattr__(self, "column_names", names)
 
     @property
     def n_vertices(self) -> int:

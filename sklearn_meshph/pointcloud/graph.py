@@ -2,10 +2,11 @@
 
 A point cloud has no edges of its own. Its vertex functions are filtered over the
 symmetric k-nearest-neighbour graph (an edge wherever either point is among the other's
-``GRAPH_NEIGHBORS`` nearest), the role the mesh's edges play for a mesh. Ten neighbours
-is where the H0 diagrams of a mesh's eigenfunctions on its vertices stop depending on
-the graph (fewer leave spurious components and pairs; the measurement is in
-``docs/point_clouds.md``).
+``GRAPH_NEIGHBORS`` nearest), the role the mesh's edges play for a mesh: that many
+neighbours is where the H0 diagrams of a mesh's eigenfunctions on its vertices stop
+depending on the graph (fewer leave spurious components and pairs; the measurement is
+in ``docs/point_clouds.md``). Without its long edges, the same graph decides which
+points are far from the rest (:func:`neighbourhood_components`).
 """
 
 from __future__ import annotations
@@ -14,10 +15,25 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-__all__ = ["GRAPH_NEIGHBORS", "canonical_order", "edge_adjacency", "knn_graph", "nearest"]
+from ..mesh import unit_box
+from ..mesh.graph import connected_components
+
+__all__ = [
+    "FAR_EDGE_RATIO",
+    "GRAPH_NEIGHBORS",
+    "canonical_order",
+    "edge_adjacency",
+    "knn_graph",
+    "nearest",
+    "neighbourhood_components",
+]
 
 #: Neighbours per point of the graph that lower-star persistence filters on a cloud.
 GRAPH_NEIGHBORS = 10
+
+#: An edge of the kNN graph longer than this many times the smaller neighbourhood radius
+#: of its two ends joins points that are far apart for the cloud's own sampling.
+FAR_EDGE_RATIO = 8.0
 
 
 def canonical_order(points: np.ndarray) -> np.ndarray:
@@ -47,8 +63,6 @@ def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndar
     Computed in the unit box and in :func:`canonical_order`, then renumbered: the same
     graph at any scale float64 holds, and a permuted cloud gives the permuted graph.
     """
-    from ..spectral.solve import unit_box
-
     points = np.asarray(points, dtype=np.float64)
     n = len(points)
     if n < 2:
@@ -62,9 +76,36 @@ def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndar
     return np.unique(edges, axis=0)
 
 
+def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
+    """Connected components of the kNN graph without its long edges.
+
+    The neighbourhood radius of a point is the distance to its ``GRAPH_NEIGHBORS``-th
+    nearest neighbour. An edge ``(i, j)`` of the kNN graph is long when it is longer
+    than :data:`FAR_EDGE_RATIO` times the smaller radius of its two ends. A stray point
+    (or a small cluster) far from the surface has all its nearest neighbours far away:
+    it joins the cloud only through such edges, longer than anything the sampling makes
+    near the surface, and becomes a component of its own. The test compares lengths
+    with lengths, so it holds at any scale and density; the radius of the point at the
+    surface end decides, since the far end's radius is as long as the edge itself.
+
+    Returns ``(n_components, labels)`` as
+    :func:`sklearn_meshph.mesh.graph.connected_components` does (labels in the order
+    of each component's lowest index). ``points`` must be distinct.
+    """
+    n = len(points)
+    if n < 2:
+        return n, np.zeros(n, dtype=np.int64)
+    distances, indices = nearest(points, GRAPH_NEIGHBORS)
+    radius = distances[:, -1]
+    a = np.repeat(np.arange(n), indices.shape[1])
+    b = indices.ravel()
+    short = distances.ravel() <= FAR_EDGE_RATIO * np.minimum(radius[a], radius[b])
+    return connected_components(n, np.column_stack([a[short], b[short]]))
+
+
 def edge_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:
     """Symmetric adjacency (CSR, data 1, sorted columns) of an edge list, in the layout
-    of :func:`sklearn_meshph.mesh._graph.mesh_edges` (one integer type for ``indptr``
+    of :func:`sklearn_meshph.mesh.graph.mesh_edges` (one integer type for ``indptr``
     and ``indices``, int32 unless huge), which the union-find loops walk."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     rows = np.concatenate([edges[:, 0], edges[:, 1]])

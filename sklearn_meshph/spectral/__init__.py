@@ -6,29 +6,33 @@
 - :mod:`.factorization`: the factorization backends (registry ``SOLVERS``) over
   :mod:`._cholesky` (our supernodal Cholesky) and SciPy's SuperLU, with the
   fill-reducing order of :mod:`._ordering`;
+- :mod:`.solve`: one sample's cleaning and eigensolve in the unit box, the unit of work
+  the cache stores;
+- :mod:`.cache`: the eigen cache (data-only entries, checked on read);
 - :mod:`.signatures`: heat and wave kernel signatures of the eigenpairs (registry
   ``SIGNATURES``);
+- :mod:`.quality`: the needle-triangle check, ``MeshQualityWarning``;
+- :mod:`.multiplicity`: repeated eigenvalues, ``RepeatedEigenvalueWarning``;
 - :mod:`.shape_dna`: ``ShapeDNA``, the spectrum as a feature vector;
-- :mod:`.transformer`: ``LaplacianEigenTransformer`` and its per-mesh cache.
+- :mod:`.transformer`: ``LaplacianEigenTransformer``.
 """
 
 from .cache import CacheWarning
 from .eigensolver import laplacian_eigenfunctions
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
+from .multiplicity import RepeatedEigenvalueWarning
+from .quality import MeshQualityWarning
 from .shape_dna import ShapeDNA
 from .signatures import SIGNATURES
-from .transformer import (
-    LaplacianEigenTransformer,
-    MeshQualityWarning,
-    RepeatedEigenvalueWarning,
-)
+from .transformer import ConstantEigenfunctionWarning, LaplacianEigenTransformer
 
 __all__ = [
     "CacheWarning",
     "LAPLACIANS",
     "SIGNATURES",
     "SOLVERS",
+    "ConstantEigenfunctionWarning",
     "LaplacianEigenTransformer",
     "MeshQualityWarning",
     "RepeatedEigenvalueWarning",

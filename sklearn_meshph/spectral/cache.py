@@ -8,7 +8,9 @@ where a point cloud is looked up, and a mesh's entry only where a mesh is.
 Nothing is unpickled: arrays are read from their ``.npy`` header, whose dtype and shape
 are checked against what the key's mesh allows before a byte of data is read, then
 checked for finiteness and consistency. A corrupt, truncated, oversized or mismatched
-entry is recomputed and replaced, with a :class:`CacheWarning`. The key hashes the
+entry is recomputed and replaced, with a :class:`CacheWarning`; so is a tampered header
+(a wrong type, ``Infinity``, deep nesting) and anything but a regular file in place of
+one (a FIFO, a folder, a symbolic link), which is never opened. The key hashes the
 input mesh's bytes, the solver settings, the package version and
 :data:`NUMERICS_VERSION`, which any change to cleaning, assembly or the eigensolver
 must bump (a test fails when those modules change and it does not), so an upgrade
@@ -19,10 +21,13 @@ folder that cannot be written is used read-only, with one warning.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
+import math
 import os
 import shutil
+import stat
 import time
 import uuid
 import warnings
@@ -32,7 +37,14 @@ import numpy as np
 
 from ..mesh.cleaning import CleaningReport, CleanMesh
 
-__all__ = ["NUMERICS_FILES", "NUMERICS_VERSION", "CacheWarning", "EigenCache", "numerics_digest"]
+__all__ = [
+    "NUMERICS_FILES",
+    "NUMERICS_VERSION",
+    "CacheWarning",
+    "EigenCache",
+    "cache_of",
+    "numerics_digest",
+]
 
 #: Bumped whenever the numbers a solve gives may change (cleaning, assembly, solver).
 NUMERICS_VERSION = 2
@@ -42,7 +54,7 @@ NUMERICS_FILES = (
     "mesh/cleaning.py",
     "mesh/welding.py",
     "mesh/_geometry.py",
-    "mesh/_graph.py",
+    "mesh/graph.py",
     "spectral/laplacians.py",
     "spectral/_assembly.py",
     "spectral/eigensolver.py",
@@ -76,10 +88,74 @@ def numerics_digest() -> str:
     return digest.hexdigest()
 
 
+# Opening never blocks (a FIFO without a writer) nor follows a link, where the system
+# allows it; what is opened is checked to be a regular file before a byte is read.
+_OPEN_FLAGS = (
+    os.O_RDONLY
+    | getattr(os, "O_NONBLOCK", 0)
+    | getattr(os, "O_NOFOLLOW", 0)
+    | getattr(os, "O_BINARY", 0)
+)
+
+
+def _open_regular(path: Path):
+    """``path`` opened for binary reading if it is a regular file (not a link, a FIFO,
+    a device or a folder), else a ``ValueError``."""
+    if not stat.S_ISREG(os.lstat(path).st_mode):
+        raise ValueError(f"{path.name} is not a regular file")
+    descriptor = os.open(path, _OPEN_FLAGS)
+    try:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):  # swapped since the lstat
+            raise ValueError(f"{path.name} is not a regular file")
+        return os.fdopen(descriptor, "rb")
+    except BaseException:
+        os.close(descriptor)
+        raise
+
+
+def _refuse_constant(name: str):
+    raise ValueError(f"the header holds {name}")
+
+
+def _count(header: dict, name: str) -> int:
+    """A non-negative int of the header (a JSON integer, not a string or a float)."""
+    value = header[name]
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        raise ValueError(f"{name} is {value!r}, not a count")
+    return value
+
+
+def _report(fields) -> CleaningReport:
+    """The cleaning report of a header, each field of the type it is declared with."""
+    if not isinstance(fields, dict):
+        raise ValueError("the cleaning report is not a mapping")
+    values = {}
+    for spec in dataclasses.fields(CleaningReport):
+        value = fields[spec.name]
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not math.isfinite(value) or value < 0:
+            raise ValueError(f"report field {spec.name} is {value!r}")
+        values[spec.name] = int(value) if spec.type in ("int", int) else float(value)
+        if values[spec.name] != value:
+            raise ValueError(f"report field {spec.name} is {value!r}, not an int")
+    return CleaningReport(**values)
+
+
+def _remove(path: Path) -> None:
+    """Remove whatever is at ``path`` (a folder, a file, a link), if anything."""
+    try:
+        if stat.S_ISDIR(os.lstat(path).st_mode):
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            os.unlink(path)
+    except OSError:
+        pass
+
+
 def _read_array(path: Path, dtype, max_size: int, ndim: int) -> np.ndarray:
     """An array from a ``.npy`` file whose header says ``dtype``, ``ndim`` dimensions
     and at most ``max_size`` elements, checked before the data is read."""
-    with open(path, "rb") as stream:
+    with _open_regular(path) as stream:
         version = np.lib.format.read_magic(stream)
         if version == (1, 0):
             shape, fortran, found = np.lib.format.read_array_header_1_0(stream)
@@ -96,6 +172,25 @@ def _read_array(path: Path, dtype, max_size: int, ndim: int) -> np.ndarray:
     if len(data) != size * np.dtype(dtype).itemsize:
         raise ValueError(f"{path.name}: {len(data)} bytes of data for shape {shape}")
     return np.frombuffer(data, dtype=dtype).reshape(shape).copy()
+
+
+def cache_of(memory):
+    """The eigen cache of a ``memory`` parameter: an :class:`EigenCache` in a folder (a
+    path, or the location of a ``joblib.Memory``), a caching object of the user's (one
+    with ``cache`` but no location: used as joblib's would be), or None. An empty path
+    is refused (it is not taken as the current folder)."""
+    if memory is None:
+        return None
+    if isinstance(memory, str | os.PathLike):
+        if not os.fspath(memory):
+            raise ValueError(
+                "memory must be a folder, a joblib.Memory or None, got an empty path "
+                "(write '.' for the current folder)"
+            )
+        return EigenCache(memory)
+    if hasattr(memory, "location"):  # a joblib.Memory: its folder, or no cache at all
+        return None if memory.location is None else EigenCache(memory.location)
+    return memory
 
 
 class EigenCache:
@@ -125,11 +220,21 @@ class EigenCache:
         ``points``: the entry is a point cloud's, whose cleaned sample has no faces
         (a mesh's has at least one)."""
         entry = self.folder / key
-        if not entry.is_dir():
+        try:
+            if not stat.S_ISDIR(os.lstat(entry).st_mode):  # a link or a file: not ours
+                raise ValueError("not a folder")
+        except (FileNotFoundError, NotADirectoryError):  # no entry, or no folder yet
+            return None
+        except (OSError, ValueError) as error:
+            warnings.warn(
+                f"eigen cache entry {entry} is unusable and is recomputed: {error}",
+                CacheWarning,
+                stacklevel=3,
+            )
             return None
         try:
             return self._read(entry, key, n_input, max_pairs, points)
-        except (OSError, ValueError, KeyError, TypeError) as error:
+        except (OSError, ValueError, KeyError, TypeError, RecursionError) as error:
             warnings.warn(
                 f"eigen cache entry {entry} is unusable and is recomputed: {error}",
                 CacheWarning,
@@ -138,16 +243,19 @@ class EigenCache:
             return None
 
     def _read(self, entry: Path, key: str, n_input: int, max_pairs: int, points: bool):
-        with open(entry / "header.json", "rb") as stream:
+        with _open_regular(entry / "header.json") as stream:
             text = stream.read(_MAX_HEADER + 1)
         if len(text) > _MAX_HEADER:
             raise ValueError("header.json is too large")
-        header = json.loads(text)
+        # Infinity and NaN are not JSON numbers: refused, not read as floats.
+        header = json.loads(text, parse_constant=_refuse_constant)
+        if not isinstance(header, dict):
+            raise ValueError("the header is not a mapping")
         if header.get("format") != _FORMAT or header.get("key") != key:
             raise ValueError("the header does not belong to this key")
-        n = int(header["n_vertices"])
-        k = int(header["n_pairs"])
-        faces_size = int(header["n_faces"]) * 3
+        n = _count(header, "n_vertices")
+        k = _count(header, "n_pairs")
+        faces_size = _count(header, "n_faces") * 3
         if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and (faces_size == 0) == points):
             raise ValueError(
                 f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces do not fit the "
@@ -173,7 +281,7 @@ class EigenCache:
         bad = [name for name, ok in checks.items() if not ok]
         if bad:
             raise ValueError(f"inconsistent arrays: {', '.join(bad)}")
-        report = CleaningReport(**header["report"])
+        report = _report(header["report"])
         clean = CleanMesh(vertices, faces, indices, input_to_kept=to_kept, report=report)
         return clean, values, vectors
 
@@ -211,8 +319,7 @@ class EigenCache:
                 array = np.ascontiguousarray(array, dtype=dtypes.get(name, np.float64))
                 np.save(temporary / f"{name}.npy", array, allow_pickle=False)
             entry = self.folder / key
-            if entry.exists():  # an unusable entry being replaced
-                shutil.rmtree(entry, ignore_errors=True)
+            _remove(entry)  # an unusable entry being replaced
             try:
                 os.rename(temporary, entry)
             except OSError:  # another writer got there first: theirs is as good

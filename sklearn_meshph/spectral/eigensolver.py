@@ -7,6 +7,7 @@ once (:mod:`.factorization`); below a few hundred vertices a dense solver is use
 
 from __future__ import annotations
 
+import warnings
 from numbers import Integral
 
 import numpy as np
@@ -16,8 +17,8 @@ from scipy.sparse.linalg import ArpackError, eigsh
 
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
+from ..inputs import check_input
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
-from ..pointcloud.validation import check_input
 from .factorization import SOLVERS, ShiftInvertOperator
 from .laplacians import LAPLACIANS
 
@@ -66,13 +67,13 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
 def generalized_eigenpairs(
     L: sp.spmatrix,
     M: sp.spmatrix,
-    n_eigs: int,
+    n_eigenpairs: int,
     *,
     seed: int = 0,
     points: np.ndarray | None = None,
     solver: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The ``n_eigs`` smallest eigenpairs of ``L phi = lambda M phi``.
+    """The ``n_eigenpairs`` smallest eigenpairs of ``L phi = lambda M phi``.
 
     Eigenvectors are M-orthonormal (``phi^T M phi = 1``) with signs fixed by
     :func:`fix_signs`; eigenvalues are ascending. ARPACK's start vector is drawn from
@@ -87,7 +88,7 @@ def generalized_eigenpairs(
     # threads (several times slower on a busy machine).
     with one_blas_thread():
         values = vectors = None
-        if n > _DENSE_MAX_VERTICES and n_eigs < n - 1:
+        if n > _DENSE_MAX_VERTICES and n_eigenpairs < n - 1:
             sigma = eigen_shift(L, M)
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
@@ -95,19 +96,19 @@ def generalized_eigenpairs(
             # edge) can stall ARPACK: no convergence, or error 3 ("no shifts could be
             # applied"). A larger Krylov space resolves it; failing that, a small mesh
             # is solved densely.
-            ncv = min(n, max(2 * n_eigs + 1, 20))
+            ncv = min(n, max(2 * n_eigenpairs + 1, 20))
             for attempt in range(3):
                 try:
                     values, vectors = eigsh(
                         L,
-                        k=n_eigs,
+                        k=n_eigenpairs,
                         M=M,
                         sigma=sigma,
                         which="LM",
                         OPinv=op,
                         v0=v0,
                         ncv=ncv,
-                        maxiter=max(1000, 10 * n_eigs),
+                        maxiter=max(1000, 10 * n_eigenpairs),
                     )
                 except ArpackError:  # ArpackNoConvergence is one
                     values = vectors = None
@@ -122,7 +123,7 @@ def generalized_eigenpairs(
                     break
         if values is None:
             values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
-            values, vectors = values[:n_eigs], vectors[:, :n_eigs]
+            values, vectors = values[:n_eigenpairs], vectors[:, :n_eigenpairs]
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
     values = np.maximum(values, 0.0)
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))
@@ -131,23 +132,25 @@ def generalized_eigenpairs(
 
 @validate_params(
     {
-        "n_eigs": [Interval(Integral, 1, None, closed="left")],
+        "n_eigenpairs": [Interval(Integral, 1, None, closed="left"), None],
+        "n_eigs": [Interval(Integral, 1, None, closed="left"), None],
         "laplacian": [Options(LAPLACIANS)],
         "components": [Options(COMPONENT_POLICIES)],
         "weld": ["boolean"],
-        "random_state": [Interval(Integral, 0, None, closed="left")],
+        "random_state": [Interval(Integral, 0, 2**32 - 1, closed="both")],
         "solver": [Options(SOLVERS)],
     }
 )
 def laplacian_eigenfunctions(
     mesh,
-    n_eigs: int,
+    n_eigenpairs: int | None = None,
     laplacian: str = "cotangent",
     *,
     components: str = "largest",
     weld: bool = True,
     random_state: int = 0,
     solver: str = "auto",
+    n_eigs: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """First eigenpairs of a mesh Laplacian, the constant one included.
 
@@ -163,8 +166,9 @@ def laplacian_eigenfunctions(
         :func:`check_point_cloud`) gets the point-cloud discretization of
         ``laplacian`` (:func:`point_cloud_laplacian` for ``"cotangent"``) after its own
         cleaning (coincident points merged, one component).
-    n_eigs : int
-        Number of eigenpairs, at least 1 and at most the number of kept vertices.
+    n_eigenpairs : int
+        Number of eigenpairs, the constant one included: at least 1 and at most the
+        number of kept vertices.
     laplacian : {"cotangent", "graph"}, default="cotangent"
         ``"cotangent"`` solves ``L phi = lambda M phi`` with the cotangent stiffness and
         lumped mass; ``"graph"`` uses the graph Laplacian and ``M = I``.
@@ -174,15 +178,17 @@ def laplacian_eigenfunctions(
         Weld coincident vertices first (see :func:`clean_mesh`); ``False`` keeps the
         vertices as given.
     random_state : int, default=0
-        Seed of ARPACK's start vector.
+        Seed of ARPACK's start vector, in ``[0, 2**32 - 1]``.
     solver : {"auto", "cholesky", "superlu"}, default="auto"
         Factorization backend of the shift-invert step (:data:`SOLVERS`).
+    n_eigs : int, optional
+        The former name of ``n_eigenpairs`` (a ``FutureWarning``).
 
     Returns
     -------
-    eigenvalues : ndarray of shape (n_eigs,)
+    eigenvalues : ndarray of shape (n_eigenpairs,)
         Ascending.
-    eigenvectors : ndarray of shape (n_vertices, n_eigs)
+    eigenvectors : ndarray of shape (n_vertices, n_eigenpairs)
         Rows follow the cleaned vertex set (the input's vertices when the mesh needs no
         cleaning). Columns are M-orthonormal for ``"cotangent"`` and of unit Euclidean
         norm for ``"graph"``; signs follow the rule of
@@ -202,25 +208,40 @@ def laplacian_eigenfunctions(
     >>> [round(float(v), 1) for v in values]
     [0.0, 2.0, 2.0, 2.0, 6.0]
     """
+    if n_eigs is not None:
+        if n_eigenpairs is not None:
+            raise TypeError("give n_eigenpairs only (n_eigs is its former name)")
+        warnings.warn(
+            "laplacian_eigenfunctions(n_eigs=...) is renamed n_eigenpairs; n_eigs will be "
+            "removed in a future release",
+            FutureWarning,
+            stacklevel=3,
+        )
+        n_eigenpairs = n_eigs
+    if n_eigenpairs is None:
+        raise TypeError("laplacian_eigenfunctions() needs n_eigenpairs, the number of eigenpairs")
     vertices, faces = check_input(mesh)
     if faces is None:
-        from .solve import cloud_eigenpairs  # solve.py builds on this module
+        from .solve import SolveSettings, cloud_eigenpairs  # solve.py builds on this module
 
+        settings = SolveSettings(laplacian, "none", components, solver, weld)
         clean, values, vectors = cloud_eigenpairs(
-            vertices, laplacian, "none", components, n_eigs, random_state, None, solver, weld
+            vertices, settings, n_eigenpairs, random_state, None
         )
         warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
-        if len(values) < n_eigs:
-            raise ValueError(
-                f"n_eigs must be between 1 and {len(values)} (the kept points), got {n_eigs}"
-            )
+        kept = len(values)
+    else:
+        clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
+        warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
+        kept = len(clean.vertices)
+    if n_eigenpairs > kept:
+        raise ValueError(
+            f"n_eigenpairs must be between 1 and {kept} (the kept "
+            f"{'vertices' if faces is not None else 'points'}), got {n_eigenpairs}"
+        )
+    if faces is None:
         return values, vectors
-    clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
-    warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
-    n = len(clean.vertices)
-    if n_eigs > n:
-        raise ValueError(f"n_eigs must be between 1 and {n} (the kept vertices), got {n_eigs}")
     L, M = LAPLACIANS[laplacian].value(clean.vertices, clean.faces)
     return generalized_eigenpairs(
-        L, M, n_eigs, seed=random_state, points=clean.vertices, solver=solver
+        L, M, n_eigenpairs, seed=random_state, points=clean.vertices, solver=solver
     )

@@ -1,8 +1,9 @@
 """Spectral signatures: vertex functions made from the eigenpairs of one solve.
 
-Each signature is a function ``(eigenvalues, eigenvectors, size) -> (n_vertices, size)``
-of the first eigenpairs of ``L phi = lambda M phi`` (M-orthonormal eigenvectors, the
-constant one first) and one entry in :data:`SIGNATURES`:
+Each signature is a function ``(eigenvalues, eigenvectors, size) -> (values, names)`` of
+the first eigenpairs of ``L phi = lambda M phi`` (M-orthonormal eigenvectors, the
+constant one first), ``values`` of shape ``(n_vertices, size)`` and ``names`` a label
+per column (``"heat kernel signature t=0.0312"``), and one entry in :data:`SIGNATURES`:
 
 - ``"hks"``, the heat kernel signature ``sum_k exp(-lambda_k t) phi_k(x)^2`` (Sun,
   Ovsjanikov and Guibas, 2009) at ``size`` times;
@@ -122,8 +123,14 @@ def wave_kernel_signature(eigenvalues, eigenvectors, energies, sigma) -> np.ndar
     return (np.asarray(eigenvectors)[:, 1:] ** 2) @ weights
 
 
+def _labels(name: str, symbol: str, scales) -> tuple[str, ...]:
+    return tuple(f"{name} {symbol}={scale:.3g}" for scale in scales)
+
+
 def _hks(eigenvalues, eigenvectors, size):
-    return heat_kernel_signature(eigenvalues, eigenvectors, hks_times(eigenvalues, size))
+    times = hks_times(eigenvalues, size)
+    hks = heat_kernel_signature(eigenvalues, eigenvectors, times)
+    return hks, _labels("heat kernel signature", "t", times)
 
 
 def _log_hks(eigenvalues, eigenvectors, size):
@@ -133,11 +140,14 @@ def _log_hks(eigenvalues, eigenvectors, size):
     times = hks_times(eigenvalues, size)
     hks = heat_kernel_signature(eigenvalues, eigenvectors, times)
     trace = np.exp(-np.outer(np.asarray(eigenvalues, dtype=np.float64), times)).sum(axis=0)
-    return np.log(np.maximum(hks, np.finfo(float).tiny) / trace)
+    log_hks = np.log(np.maximum(hks, np.finfo(float).tiny) / trace)
+    return log_hks, _labels("log heat kernel signature", "t", times)
 
 
 def _wks(eigenvalues, eigenvectors, size):
-    return wave_kernel_signature(eigenvalues, eigenvectors, *wks_energies(eigenvalues, size))
+    energies, sigma = wks_energies(eigenvalues, size)
+    wks = wave_kernel_signature(eigenvalues, eigenvectors, energies, sigma)
+    return wks, _labels("wave kernel signature", "e", energies)
 
 
 SIGNATURES = Registry(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import asdict
 from numbers import Integral
 
 import numpy as np
@@ -15,78 +16,31 @@ from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
 from .._progress import parallel, track
 from .._threads import one_blas_thread
+from ..inputs import check_input
 from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
 from ..pointcloud.graph import knn_graph
-from ..pointcloud.validation import check_input
-from .cache import EigenCache
+from .cache import EigenCache, cache_of
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
+from .multiplicity import solve_covering, warn_if_repeated
+from .quality import warn_if_needles
 from .signatures import SIGNATURES
-from .solve import cloud_eigenpairs, mesh_eigenpairs, unit_box
+from .solve import SolveSettings, cloud_eigenpairs, mesh_eigenpairs
 
-__all__ = ["LaplacianEigenTransformer", "MeshQualityWarning", "RepeatedEigenvalueWarning"]
+__all__ = ["ConstantEigenfunctionWarning", "LaplacianEigenTransformer"]
 
-# Eigenpairs are solved in blocks of this many, whatever the requested index, so that a
-# grid search over small indices reuses one cached solve per mesh.
-_EIGS_BLOCK = 8
-# A repeated eigenvalue that reaches the end of a block makes the block grow, so that the
-# warning can state the whole multiplicity, by at most this many eigenpairs: beyond it
-# (a "book" of many triangles on one edge) the warning says "at least".
-_MAX_GROWTH = 4 * _EIGS_BLOCK
+# Eigenpairs are solved in blocks of this many, whatever the requested number, so that
+# a grid search over small indices or eigenpair counts reuses one cached solve per
+# mesh; what is solved beyond the request is dropped before anything sees it.
+_EIGENPAIR_BLOCK = 8
 # Eigenpairs behind a signature unless n_eigenpairs says otherwise.
 _SIGNATURE_EIGENPAIRS = 100
-# Eigenvalues closer than this (relative) count as one repeated eigenvalue.
-_REPEATED_RTOL = 1e-3
 
 
-class RepeatedEigenvalueWarning(UserWarning):
-    """The requested eigenvalue is (nearly) repeated: its eigenfunction is not unique."""
-
-
-class MeshQualityWarning(UserWarning):
-    """Most triangles of a mesh are needles: its Laplacian, hence its eigenpairs, mean
-    little."""
-
-
-# A triangle whose smallest angle has a sine below this is a needle: its cotangent
-# weight is above 1e6, and a mesh made mostly of them has a meaningless spectrum.
-NEEDLE_SINE = 1e-6
-# The share of needle triangles from which a mesh is warned about.
-NEEDLE_SHARE = 0.5
-
-
-def needle_share(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """The share of triangles whose smallest angle has a sine below ``NEEDLE_SINE``
-    (computed in a unit box, so at any scale)."""
-    unit = unit_box(np.asarray(vertices, dtype=np.float64))[0]
-    a, b, c = (unit[faces[:, k]] for k in range(3))
-    lengths = np.stack(
-        [
-            np.linalg.norm(b - c, axis=1),
-            np.linalg.norm(c - a, axis=1),
-            np.linalg.norm(a - b, axis=1),
-        ]
-    )
-    double_area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    # sin(angle at a corner) = 2 area / (product of its two edges): the smallest angle
-    # is at the corner whose two edges have the largest product.
-    products = np.stack([lengths[1] * lengths[2], lengths[2] * lengths[0], lengths[0] * lengths[1]])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sines = double_area / products.max(axis=0)
-    return float(np.mean(~(sines >= NEEDLE_SINE))) if len(faces) else 0.0
-
-
-def _warn_if_needles(clean, sample: int, stacklevel: int) -> None:
-    share = needle_share(clean.vertices, clean.faces)
-    if share > NEEDLE_SHARE:
-        warnings.warn(
-            f"sample {sample}: {100 * share:.3g}% of the triangles are needles (an angle "
-            f"with sine below {NEEDLE_SINE:g}); the Laplacian of such a mesh is "
-            "ill-conditioned and its eigenpairs mean little: remesh it",
-            MeshQualityWarning,
-            stacklevel=stacklevel + 1,
-        )
+class ConstantEigenfunctionWarning(UserWarning):
+    """``eigen_index`` asks for eigenfunction 0, the constant one: its diagram is
+    trivial (one point) and carries nothing about the shape."""
 
 
 def _size_hint(mesh) -> int:
@@ -101,109 +55,52 @@ def _size_hint(mesh) -> int:
         return 0  # invalid input: check_input reports it in the worker
 
 
-def _repeats(values: np.ndarray, i: int) -> np.ndarray:
-    """Indices of the eigenvalues that coincide with ``values[i]`` (relative 1e-3)."""
-    return np.flatnonzero(np.abs(values - values[i]) <= _REPEATED_RTOL * abs(values[i]))
-
-
-def _reaches_end(values: np.ndarray, indices) -> bool:
-    """Whether a requested repeated eigenvalue may go on past the last computed one."""
-    last = len(values) - 1
-    return any(0 < i <= last and _repeats(values, i)[-1] == last for i in indices)
-
-
 def _block(n: int) -> int:
     """``n`` rounded up to whole blocks of eigenpairs."""
-    return _EIGS_BLOCK * (-(-n // _EIGS_BLOCK))
-
-
-def _cache_of(memory):
-    """The eigen cache of a ``memory`` parameter: an :class:`EigenCache` in a folder (a
-    path, or the location of a ``joblib.Memory``), a caching object of the user's (one
-    with ``cache`` but no location: used as joblib's would be), or None."""
-    if memory is None:
-        return None
-    if isinstance(memory, str | os.PathLike):
-        return EigenCache(memory)
-    if hasattr(memory, "location"):  # a joblib.Memory: its folder, or no cache at all
-        return None if memory.location is None else EigenCache(memory.location)
-    return memory
+    return _EIGENPAIR_BLOCK * (-(-n // _EIGENPAIR_BLOCK))
 
 
 # The faces a point cloud is keyed and stored with.
 _NO_FACES = np.empty((0, 3), dtype=np.int64)
 
 
-def _cached_solve(cache, vertices, faces, settings, n_eigs, seed, index):
+def _cached_solve(cache, vertices, faces, settings, n_eigenpairs, seed, index):
     """One sample's solve through the cache; ``faces`` is None for a point cloud."""
     points = faces is None
     solve = cloud_eigenpairs if points else mesh_eigenpairs
-    arguments = (
-        settings["laplacian"],
-        settings["normalization"],
-        settings["components"],
-        n_eigs,
-        seed,
-        index,
-        settings["solver"],
-        settings["weld"],
-    )
     inputs = (vertices,) if points else (vertices, faces)
+    arguments = (*inputs, settings, n_eigenpairs, seed, index)
     if cache is None:
-        return solve(*inputs, *arguments)
+        return solve(*arguments)
     if not isinstance(cache, EigenCache):  # the user's own caching object
-        return cache.cache(solve, ignore=["index"])(*inputs, *arguments)
+        return cache.cache(solve, ignore=["index"])(*arguments)
     # A cloud is keyed with no faces, which no mesh has: the two kinds never collide.
     key = cache.key(
-        vertices, _NO_FACES if points else faces, {**settings, "n_eigs": n_eigs, "seed": seed}
+        vertices,
+        _NO_FACES if points else faces,
+        {**asdict(settings), "n_eigenpairs": n_eigenpairs, "seed": seed},
     )
-    found = cache.load(key, len(vertices), n_eigs, points=points)
+    found = cache.load(key, len(vertices), n_eigenpairs, points=points)
     if found is None:
-        found = solve(*inputs, *arguments)
+        found = solve(*arguments)
         cache.store(key, found)
     return found
 
 
-def _eigen_one(mesh, index, *, indices, n_eigs, settings, seed, memory):
+def _eigen_one(mesh, index, *, indices, n_eigenpairs, settings, seed, memory):
     """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
-    the block must cover (none for signatures, which do not depend on the basis)."""
+    the solve must cover (none for signatures, which do not depend on the basis)."""
     with one_blas_thread():
         vertices, faces = check_input(mesh, index=index)
-        limit = n_eigs + _MAX_GROWTH
-        while True:
-            clean, values, vectors = _cached_solve(
-                memory, vertices, faces, settings, n_eigs, seed, index
-            )
-            n = len(clean.vertices)
-            if n_eigs >= min(n, limit) or not _reaches_end(values, indices):
-                break
-            n_eigs = min(n_eigs + _EIGS_BLOCK, limit)
-    complete = len(values) == n
+        (clean, values, vectors), complete = solve_covering(
+            lambda n: _cached_solve(memory, vertices, faces, settings, n, seed, index),
+            _block(n_eigenpairs),
+            indices,
+            _EIGENPAIR_BLOCK,
+        )
     # The cleaning report travels back with the results: the parent warns, not the
     # worker, whose warnings joblib would not show.
     return clean, values, vectors, complete
-
-
-def _warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -> None:
-    for i in indices:
-        if i == 0:
-            continue
-        close = _repeats(values, i)
-        if len(close) < 2:
-            continue
-        open_ended = not complete and close[-1] == len(values) - 1
-        lam = values[i]
-        others = np.delete(values, close)
-        gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
-        spread = (values[close].max() - values[close].min()) / abs(lam)
-        warnings.warn(
-            f"sample {sample}: eigenvalue {i} ({lam:.6g}) is repeated with multiplicity "
-            f"{'at least ' if open_ended else ''}{len(close)} (eigenvalues {close[0]}-"
-            f"{close[-1]} agree within a relative {spread:.1e}; relative gap to the next "
-            f"distinct one {gap:.2g}); its eigenfunction is not unique",
-            RepeatedEigenvalueWarning,
-            stacklevel=4,
-        )
 
 
 class LaplacianEigenTransformer(SampleTransformer):
@@ -258,8 +155,11 @@ class LaplacianEigenTransformer(SampleTransformer):
     memory : str, path, joblib.Memory or None, default=None
         A folder (or a ``joblib.Memory``, whose location is used) where each mesh's
         eigensolve is cached, keyed on the input mesh's content, the solver settings,
-        the package version and its numerics version, not on ``eigen_index``: a grid
-        search over indices and signatures solves each mesh once. Entries are data only
+        the package version, its numerics version and the start vector's seed, not on
+        ``eigen_index``, the signature or ``n_scales``: a grid search over those, and
+        over ``n_eigenpairs`` within one block of the solver, solves each mesh once
+        (with a fixed ``random_state``: ``None`` draws a new start vector per call, so
+        it never hits). An empty path is refused. Entries are data only
         (``.npy`` arrays and a JSON header, read without unpickling and checked before
         use), so a shared or hostile folder cannot run code; an unusable entry is
         recomputed with a ``CacheWarning``, and a read-only folder is used without
@@ -270,8 +170,11 @@ class LaplacianEigenTransformer(SampleTransformer):
         :func:`joblib.parallel_backend` context; ``-1`` means all processors. BLAS is
         limited to one thread inside each solve.
     random_state : int, RandomState instance or None, default=0
-        Seeds ARPACK's start vector (the same for every mesh). The default makes
-        results reproducible; the output does not depend on it beyond rounding.
+        Seeds ARPACK's start vector (the same for every mesh), an int in
+        ``[0, 2**32 - 1]``. The default makes results reproducible and cached solves
+        reusable; the output does not depend on it beyond rounding. ``None`` or a
+        ``RandomState`` draws a new start vector at every call, which ``memory`` then
+        never finds in its cache.
     solver : {"auto", "cholesky", "superlu"}, default="auto"
         Factorization backend of the shift-invert eigensolver: our supernodal Cholesky
         (``"auto"`` and ``"cholesky"``) or SciPy's SuperLU. Both give the same
@@ -287,11 +190,13 @@ class LaplacianEigenTransformer(SampleTransformer):
         and of the basis of a repeated eigenspace (up to the truncation at
         ``n_eigenpairs``, which may cut the last eigenspace).
     n_eigenpairs : int, default=None
-        Eigenpairs to solve, the constant one included: behind a signature (``None``:
-        100), or at least as many as the eigenfunctions need (``None``: the block
-        that covers ``eigen_index``). Every field keeps them all as ``spectrum`` (for
-        :class:`ShapeDNA`). A grid over signatures, scales and indices with the same
-        value reuses one cached solve per mesh (``memory``).
+        The number of eigenpairs used, the constant one included: exactly the first
+        ``n_eigenpairs`` are behind a signature (``None``: 100) and in each field's
+        ``spectrum`` (for :class:`ShapeDNA`, whose ``n_eigenpairs`` counts the same
+        way). With ``signature="eigenfunctions"`` it must exceed ``max(eigen_index)``
+        (``None``: ``max(eigen_index) + 1``). The solver works in blocks of a few
+        eigenpairs and drops what it solved beyond the request, so a grid over nearby
+        values reuses one cached solve per mesh (``memory``).
     n_scales : int, default=5
         Times (``"hks"``) or energies (``"wks"``) of a signature, chosen from each
         mesh's eigenvalues (scale-free at unit area); ignored for ``"eigenfunctions"``.
@@ -314,8 +219,10 @@ class LaplacianEigenTransformer(SampleTransformer):
     are sign invariant anyway. When the requested eigenvalue is repeated (relative
     spread below 1e-3, as on spheres and tori) its eigenfunction is an arbitrary member
     of an eigenspace and a :class:`RepeatedEigenvalueWarning` says so, with the
-    multiplicity; the solve grows by at most 32 eigenpairs to find it, beyond which the
-    warning says "multiplicity at least m".
+    multiplicity; the solve grows by a few blocks of eigenpairs to find it, beyond
+    which the warning says "multiplicity at least m". ``eigen_index=0`` (the constant
+    function, whose diagram is a single point) is allowed, with a
+    :class:`ConstantEigenfunctionWarning`.
 
     References
     ----------
@@ -397,7 +304,18 @@ class LaplacianEigenTransformer(SampleTransformer):
 
     def _check_params(self) -> None:
         super()._check_params()
-        self._indices()
+        indices = self._indices()
+        cache_of(self.memory)  # refuses an empty path
+        if (
+            SIGNATURES[self.signature].value is None
+            and self.n_eigenpairs is not None
+            and self.n_eigenpairs <= max(indices)
+        ):
+            raise ValueError(
+                f"n_eigenpairs={self.n_eigenpairs} does not reach eigen_index "
+                f"{max(indices)}: the eigenpairs are counted from the constant one, "
+                f"so it needs n_eigenpairs >= {max(indices) + 1}"
+            )
 
     def transform(self, X):
         """Compute the eigenfunction(s) of every mesh.
@@ -423,30 +341,43 @@ class LaplacianEigenTransformer(SampleTransformer):
             When cleaning drops more than 1% of a mesh's vertices or area.
         RepeatedEigenvalueWarning
             When a requested eigenvalue is repeated.
+        ConstantEigenfunctionWarning
+            When ``eigen_index`` holds 0, the constant eigenfunction.
         """
         self._check_params()
         meshes = self._check_samples(X)
         indices = self._indices()
+        signature = SIGNATURES[self.signature].value
+        if signature is None and 0 in indices:
+            warnings.warn(
+                "eigen_index 0 is the constant eigenfunction: its persistence diagram "
+                "is a single point and says nothing about the shape; the Fiedler vector "
+                "is eigen_index=1",
+                ConstantEigenfunctionWarning,
+                stacklevel=2,
+            )
         if isinstance(self.random_state, Integral):
             seed = int(self.random_state)
-        else:
+        else:  # a RandomState or None: a new start vector, hence a new cache key, per call
             seed = int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
-        memory = _cache_of(self.memory)
+        memory = cache_of(self.memory)
         # Largest meshes first: workers that finish early pick up the small ones, so a
         # collection of mixed sizes keeps every worker busy to the end.
         order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
-        signature = SIGNATURES[self.signature].value
         if signature is None:
-            n_eigs, tracked = _block(max(max(indices) + 3, self.n_eigenpairs or 0)), indices
+            # Two beyond the last index: a repeated eigenvalue there is seen whole.
+            n_solve, tracked = max(max(indices) + 3, self.n_eigenpairs or 0), indices
+            n_kept = self.n_eigenpairs or max(indices) + 1
         else:
-            n_eigs, tracked = _block(self.n_eigenpairs or _SIGNATURE_EIGENPAIRS), ()
-        settings = {
-            "laplacian": self.laplacian,
-            "normalization": self.normalization,
-            "components": self.components,
-            "solver": self.solver,
-            "weld": self.weld,
-        }
+            n_kept = n_solve = self.n_eigenpairs or _SIGNATURE_EIGENPAIRS
+            tracked = ()
+        settings = SolveSettings(
+            laplacian=self.laplacian,
+            normalization=self.normalization,
+            components=self.components,
+            solver=self.solver,
+            weld=self.weld,
+        )
         # Held for the whole parallel call: threads of a threading backend then share
         # one limit instead of setting and restoring it under each other's feet.
         with one_blas_thread():
@@ -455,7 +386,7 @@ class LaplacianEigenTransformer(SampleTransformer):
                     meshes[i],
                     i,
                     indices=tracked,
-                    n_eigs=n_eigs,
+                    n_eigenpairs=n_solve,
                     settings=settings,
                     seed=seed,
                     memory=memory,
@@ -472,19 +403,24 @@ class LaplacianEigenTransformer(SampleTransformer):
             report = clean.report
             # First: a mesh reduced to a few vertices is explained before it is refused.
             warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
-            _warn_if_needles(clean, i, stacklevel=3)
+            warn_if_needles(clean, i, stacklevel=3)
             if signature is not None:
+                # Exactly the eigenpairs asked for: the solve's block is not seen.
+                values, vectors = values[:n_kept], vectors[:, :n_kept]
                 if len(values) < 2:
                     raise ValueError(f"sample {i}: the cleaned mesh has too few vertices")
-                field_values, field_eigenvalues = signature(values, vectors, self.n_scales), None
+                field_values, names = signature(values, vectors, self.n_scales)
+                field_eigenvalues = None
             elif max(indices) >= len(values):
                 raise ValueError(
                     f"sample {i}: eigen_index {max(indices)} needs at least "
                     f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
                 )
             else:
-                _warn_if_repeated(values, indices, i, complete)
+                warn_if_repeated(values, indices, i, complete)
                 field_values, field_eigenvalues = vectors[:, column], values[column]
+                names = tuple(f"eigenfunction {k}" for k in indices)
+                values = values[:n_kept]
             identity = len(clean.vertices) == report.n_input_vertices
             # A cloud's complex is its kNN graph, built here from the kept points (cheap,
             # and the same whether the solve came from the cache or not).
@@ -500,6 +436,7 @@ class LaplacianEigenTransformer(SampleTransformer):
                     input_to_kept=None if identity else clean.input_to_kept,
                     cleaning=report if report.dropped else None,
                     spectrum=values,
+                    column_names=names,
                 )
             )
         return fields
