@@ -1,14 +1,19 @@
-"""Progress for long work: joblib tasks returned as they finish, and tqdm bars when
-tqdm is installed (the ``progress`` extra), silence otherwise and whenever ``verbose``
-is 0."""
+"""Parallel work and its progress: joblib tasks returned as they finish, the one
+scheduler of per-sample work (:func:`map_samples`, its blocks from
+:func:`sample_blocks`), and tqdm bars when tqdm is installed (the ``progress``
+extra), silence otherwise and whenever ``verbose`` is 0."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-from joblib import Parallel
+import numpy as np
+from joblib import Parallel, delayed, effective_n_jobs
 
-__all__ = ["parallel", "track"]
+__all__ = ["map_samples", "parallel", "sample_blocks", "track"]
+
+# Samples per block at most: bounds the memory of the results in flight.
+_BLOCK = 2048
 
 
 def parallel(n_jobs, prefer=None) -> Parallel:
@@ -32,3 +37,28 @@ def track(items: Iterable, *, total: int, desc: str, verbose: int) -> Iterator:
     except ImportError:
         return iter(items)
     return iter(tqdm(items, total=total, desc=desc, unit="sample", leave=False))
+
+
+def sample_blocks(n: int, n_jobs) -> list[tuple[int, int]]:
+    """Consecutive ``(start, stop)`` blocks of ``n`` samples: a few per worker, each of
+    at most ``_BLOCK`` samples."""
+    n_blocks = max(-(-n // _BLOCK), min(n, 4 * effective_n_jobs(n_jobs)))
+    bounds = np.linspace(0, n, n_blocks + 1).astype(int)
+    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+
+
+def map_samples(
+    function, items, *, n_jobs=None, prefer=None, desc: str = "", verbose: int = 0
+) -> list:
+    """``[function(item) for item in items]``, in order, over joblib when there is more
+    than one item and more than one worker, with a progress bar behind ``verbose``.
+
+    The one scheduler of per-sample work: ``items`` are samples, or blocks of them
+    (:func:`sample_blocks`). ``prefer="threads"`` suits functions that release the GIL.
+    """
+    items = list(items)
+    if len(items) <= 1 or effective_n_jobs(n_jobs) == 1:
+        results = map(function, items)
+    else:
+        results = parallel(n_jobs, prefer=prefer)(delayed(function)(item) for item in items)
+    return list(track(results, total=len(items), desc=desc, verbose=verbose))

@@ -1,6 +1,7 @@
 """Kernels between diagrams and the sliced Wasserstein distance: gudhi's values, tuples,
 properties (symmetry, positive semi-definiteness, metric axioms, the bound against W1),
-the essential-point policy, parallel determinism and the estimator API."""
+the infinite-point policy, parallel determinism and the estimator API (feature names,
+pandas output)."""
 
 import numpy as np
 import pytest
@@ -8,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from joblib import parallel_backend
 from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
 from sklearn.pipeline import make_pipeline
 from sklearn.svm import SVC
 
@@ -281,19 +283,19 @@ def test_essential_points(kernel):
     with_essential[1] = np.vstack([finite[1], [[0.25, np.inf]]])
     with_essential[3] = np.vstack([[[0.5, np.inf]], finite[3]])
 
-    dropped = kernel.set_params(essential="drop").fit_transform(with_essential)
+    dropped = kernel.set_params(infinite="drop").fit_transform(with_essential)
     np.testing.assert_array_equal(dropped, kernel.fit_transform(finite))
 
     with pytest.raises(ValueError, match="sample 1, diagram 0: row 2 is an essential point"):
-        kernel.set_params(essential="error").fit(with_essential)
-    kernel.set_params(essential="error").fit(finite)
+        kernel.set_params(infinite="error").fit(with_essential)
+    kernel.set_params(infinite="error").fit(finite)
     with pytest.raises(ValueError, match="sample 1, diagram 0: row 0 is an essential point"):
         kernel.transform(with_essential[2:])
 
     # Clipped at the largest finite death of the fitted diagrams, at transform time too.
     clip = max(d[:, 1].max() for d in finite if len(d))
     clipped = [np.where(np.isinf(d), clip, d) for d in with_essential]
-    kernel.set_params(essential="clip")
+    kernel.set_params(infinite="clip")
     np.testing.assert_array_equal(
         kernel.fit_transform(with_essential), kernel.fit_transform(clipped)
     )
@@ -349,7 +351,7 @@ def test_clone_params_and_pickle(kernel, new_params, estimator_round_trip):
     [
         (SlicedWassersteinKernel(bandwidth=0.0), "bandwidth"),
         (SlicedWassersteinKernel(n_directions=0), "n_directions"),
-        (PersistenceScaleSpaceKernel(essential="keep"), "essential"),
+        (PersistenceScaleSpaceKernel(infinite="keep"), "infinite"),
         (PersistenceWeightedGaussianKernel(weight="arctan"), "weight"),
         (PersistenceWeightedGaussianKernel(power=-1.0), "power"),
         (PersistenceWeightedGaussianKernel(dtype="float16"), "dtype"),
@@ -357,7 +359,7 @@ def test_clone_params_and_pickle(kernel, new_params, estimator_round_trip):
         (PersistenceWeightedGaussianKernel(weight=lambda d: d), "weight must map"),
         (
             PersistenceWeightedGaussianKernel(weight=lambda d: np.where(d[:, 0] > 0, 1, np.inf)),
-            "not all finite",
+            "is not finite",
         ),
     ],
 )
@@ -402,3 +404,24 @@ def test_support_vector_machine_on_a_precomputed_kernel(kernel):
     model = make_pipeline(clone(kernel), SVC(kernel="precomputed")).fit(train, y_train)
     assert (model.predict(train) == y_train).all()
     assert (model.predict(test) == y_test).all()
+
+
+@pytest.mark.parametrize("kernel", ALL_KERNELS, ids=IDS)
+def test_feature_names_and_pandas_output(kernel):
+    # One column per fitted sample, named after it; set_output(transform="pandas") used
+    # to fail for want of get_feature_names_out.
+    pd = pytest.importorskip("pandas")
+    fitted, new = random_diagrams(5, seed=3), random_diagrams(3, seed=4)
+    kernel = clone(kernel)
+    prefix = type(kernel).__name__.lower()
+    with pytest.raises(NotFittedError, match="not fitted"):
+        kernel.get_feature_names_out()
+    names = list(kernel.fit(fitted).get_feature_names_out())
+    assert names == [f"{prefix}{i}" for i in range(5)]
+    frame = kernel.set_output(transform="pandas").transform(new)
+    assert isinstance(frame, pd.DataFrame) and list(frame.columns) == names
+    np.testing.assert_array_equal(
+        frame.to_numpy(), kernel.set_output(transform="default").transform(new)
+    )
+    square = kernel.set_output(transform="pandas").fit_transform(fitted)
+    assert square.shape == (5, 5) and list(square.columns) == names

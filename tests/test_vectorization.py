@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from sklearn.base import clone
 from sklearn.linear_model import LogisticRegression
 from sklearn.model_selection import StratifiedKFold, cross_val_score
 from sklearn.pipeline import make_pipeline
@@ -19,7 +20,10 @@ from sklearn_meshph import (
     PersistenceEntropy,
     PersistenceImage,
     PersistenceLandscape,
+    PersistenceScaleSpaceKernel,
+    PersistenceWeightedGaussianKernel,
     Silhouette,
+    SlicedWassersteinKernel,
     make_shapes,
 )
 
@@ -193,7 +197,7 @@ def test_sklearn_contract(vectorizer, estimator_round_trip):
     vectorizer.set_params(dtype="float64", n_jobs=2)
     np.testing.assert_array_equal(vectorizer.fit(pairs).transform(pairs), features)
     vectorizer.set_params(n_jobs=None)
-    estimator_round_trip(vectorizer, pairs, {"essential": "clip"})
+    estimator_round_trip(vectorizer, pairs, {"infinite": "clip"})
 
 
 def test_essential_policies():
@@ -201,10 +205,10 @@ def test_essential_policies():
     stats = DiagramStatistics(quantiles=())
     dropped = stats.fit_transform(diagrams)
     assert dropped[0, 0] == 1  # one finite point counted
-    clipped = stats.set_params(essential="clip").fit_transform(diagrams)
+    clipped = stats.set_params(infinite="clip").fit_transform(diagrams)
     assert clipped[0, 0] == 2 and clipped[0, 2] == pytest.approx(2.5)  # clipped at 3.0
     with pytest.raises(ValueError, match=r"sample 0, diagram 0: row 1 is an essential"):
-        stats.set_params(essential="error").fit(diagrams)
+        stats.set_params(infinite="error").fit(diagrams)
 
 
 def test_malformed_diagrams_name_the_sample():
@@ -259,3 +263,143 @@ def test_a_linear_model_on_images_of_mesh_diagrams():
     )
     scores = cross_val_score(model, meshes, y, cv=StratifiedKFold(5))
     assert scores.mean() >= 0.8  # chance is 1/6
+
+
+def rips_h0_like(n, seed=0):
+    """Diagrams whose births are all 0, as Rips H0 diagrams are."""
+    rng = np.random.default_rng(seed)
+    return [np.column_stack([np.zeros(5), rng.uniform(0.1, 2.0, 5)]) for _ in range(n)]
+
+
+@pytest.mark.parametrize("sampling", ["point", "pixel"])
+def test_images_of_equal_births_are_not_zero(sampling):
+    # A learned birth axis of zero width used to give pixels of zero width: all zeros.
+    diagrams = rips_h0_like(4)
+    image = PersistenceImage(bandwidth=0.3, resolution=(5, 5), sampling=sampling)
+    features = image.fit_transform(diagrams)
+    assert (features.sum(axis=1) > 0).all()
+    lo, hi = image.im_ranges_[0, :2]
+    assert lo == -0.3 and hi == 0.3  # widened by the bandwidth on each side
+
+
+EDGE_ESTIMATORS = [
+    PersistenceImage(resolution=(4, 4)),
+    PersistenceImage(resolution=(4, 4), sampling="pixel"),
+    PersistenceLandscape(resolution=8),
+    Silhouette(resolution=8),
+    BettiCurve(resolution=8),
+    EntropyCurve(resolution=8),
+    PersistenceEntropy(),
+    DiagramStatistics(),
+    SlicedWassersteinKernel(),
+    PersistenceScaleSpaceKernel(),
+    PersistenceWeightedGaussianKernel(weight="persistence"),
+]
+EDGE_IDS = [
+    "image",
+    "pixel-image",
+    "landscape",
+    "silhouette",
+    "betti",
+    "entropy-curve",
+    "entropy",
+    "statistics",
+    "sliced",
+    "scale-space",
+    "weighted",
+]
+EDGE_DIAGRAMS = [np.array([[0.0, 1.0], [0.5, 2.0]]), np.array([[0.2, 0.3]]), np.empty((0, 2))]
+
+
+def _settings(estimator):
+    """The edge settings of the parameters ``estimator`` has, each with the words its
+    error must hold."""
+    params = estimator.get_params()
+    cases = []
+    if "bandwidth" in params:
+        cases += [({"bandwidth": b}, "bandwidth") for b in (1e-170, np.inf, 1e300, 0.0, -1.0)]
+    if "sample_range" in params:
+        for bad in [(2.0, 1.0), (0.0, np.inf), (-np.inf, 1.0), (1.0, 1.0), (None, -5.0)]:
+            cases.append(({"sample_range": bad}, "sample_range"))
+    if "im_range" in params:
+        for bad in [(1, 0, 0, 1), (0, 1, 1, 0), (0, np.inf, 0, 1), (0, 1, -np.inf, 1)]:
+            cases.append(({"im_range": bad}, "im_range"))
+    return cases
+
+
+@pytest.mark.parametrize("estimator", EDGE_ESTIMATORS, ids=EDGE_IDS)
+def test_parameters_at_the_edges_are_refused_clearly(estimator):
+    for params, words in _settings(estimator):
+        with pytest.raises(ValueError, match=words):
+            clone(estimator).set_params(**params).fit(EDGE_DIAGRAMS)
+
+
+@pytest.mark.parametrize("estimator", EDGE_ESTIMATORS, ids=EDGE_IDS)
+@pytest.mark.parametrize("scale", [1e-300, 1e150, 1e300, 1e307, 1e308])
+def test_extreme_points_give_finite_values_or_a_clear_error(estimator, scale):
+    with np.errstate(over="ignore"):  # a death beyond float64 is an essential point
+        diagrams = [d * scale for d in EDGE_DIAGRAMS] + [np.array([[-scale, scale]])]
+    try:
+        values = clone(estimator).fit_transform(diagrams)
+    except ValueError as error:
+        assert "rescale the diagrams" in str(error) and "sample " in str(error)
+        return
+    assert np.isfinite(values).all()
+
+
+def test_bandwidth_at_the_edges_of_its_range_gives_finite_values():
+    for bandwidth in (1.5e-154, 1e-150, 1e150):
+        for estimator in EDGE_ESTIMATORS:
+            if "bandwidth" in estimator.get_params():
+                values = (
+                    clone(estimator).set_params(bandwidth=bandwidth).fit_transform(EDGE_DIAGRAMS)
+                )
+                assert np.isfinite(values).all()
+
+
+@pytest.mark.parametrize("estimator", EDGE_ESTIMATORS, ids=EDGE_IDS)
+@pytest.mark.parametrize("shift", [-7.5, 3.0, 1000.0])
+def test_clipping_does_not_depend_on_the_origin(estimator, shift):
+    # Position 1 holds only essential points: they used to be clipped at 0 wherever the
+    # diagrams were, so their persistence changed with a translation.
+    samples = [
+        (np.array([[0.0, 1.0], [0.2, np.inf]]), np.array([[0.5, np.inf]])),
+        (np.array([[0.3, 2.0]]), np.array([[0.1, np.inf], [0.4, np.inf]])),
+    ]
+    moved = [tuple(d + shift for d in sample) for sample in samples]
+    stats = DiagramStatistics(quantiles=(0.5,), infinite="clip")
+    names = list(stats.fit(samples).get_feature_names_out())
+    here, there = stats.transform(samples), stats.fit(moved).transform(moved)
+    moving = [k for k, name in enumerate(names) if "birth" in name or "death" in name]
+    fixed = [k for k in range(len(names)) if k not in moving]
+    np.testing.assert_allclose(there[:, fixed], here[:, fixed], atol=1e-9)
+    np.testing.assert_allclose(there[:, moving], here[:, moving] + shift, atol=1e-9)
+    if isinstance(estimator, _TRANSLATION_INVARIANT):
+        params = {"infinite": "clip"}
+        a = clone(estimator).set_params(**params).fit_transform(samples)
+        b = clone(estimator).set_params(**params).fit_transform(moved)
+        np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-12)
+
+
+# Functions of the diagrams' shapes only: a translation leaves them as they are.
+_TRANSLATION_INVARIANT = (PersistenceEntropy, SlicedWassersteinKernel, PersistenceScaleSpaceKernel)
+
+
+def test_essential_is_the_old_name_of_infinite():
+    diagrams = [np.array([[0.0, 1.0], [0.5, np.inf]]), np.array([[0.0, 3.0]])]
+    with pytest.warns(FutureWarning, match="renamed infinite"):
+        old = DiagramStatistics(essential="clip").fit_transform(diagrams)
+    np.testing.assert_array_equal(old, DiagramStatistics(infinite="clip").fit_transform(diagrams))
+
+
+def test_one_weight_convention_for_images_and_kernels():
+    # A callable weight receives (birth, death) rows, in images as in kernels.
+    diagrams = [np.array([[1.0, 2.0], [1.5, 4.0]]), np.array([[2.0, 2.5]])]
+    persistence = lambda d: d[:, 1] - d[:, 0]  # noqa: E731
+    for estimator in (
+        PersistenceImage(resolution=(4, 4)),
+        PersistenceWeightedGaussianKernel(),
+    ):
+        called = clone(estimator).set_params(weight=persistence).fit_transform(diagrams)
+        named = clone(estimator).set_params(weight="persistence").fit_transform(diagrams)
+        np.testing.assert_allclose(called, named, rtol=1e-12)

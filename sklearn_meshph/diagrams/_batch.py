@@ -15,6 +15,7 @@ import numpy as np
 from ._bottleneck import SMALL_PAIRS, bottleneck_finite, bottleneck_small
 from ._sliced import directions, project, sliced_pairs
 from ._wasserstein import power, power_of_two_above, wasserstein_scaled
+from .validation import Packed
 
 __all__ = ["pack", "pack_one", "pack_sliced", "pair_distances", "split_diagram"]
 
@@ -114,23 +115,25 @@ def pack_one(diagram: np.ndarray):
     )
 
 
-def pack(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Validated samples (tuples of diagrams) as four flat arrays for the kernels.
+def pack(packed: Packed) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Packed samples (:class:`Packed`) as the compiled loops read them: four flat arrays.
 
-    Finite points of every diagram (sample-major, part-minor) with their offsets, and
-    the sorted births of the essential points with theirs.
+    The finite points of every diagram (sample-major, part-minor) with their offsets,
+    and the sorted births of the essential points with theirs.
     """
-    finite, essential = [], []
-    for sample in samples:
-        for diagram in sample:
-            points, births = split_diagram(diagram)
-            finite.append(points)
-            essential.append(births)
-    offsets = np.concatenate([[0], np.cumsum([len(d) for d in finite])]).astype(np.int64)
-    essential_offsets = np.concatenate([[0], np.cumsum([len(e) for e in essential])])
-    points = np.ascontiguousarray(np.vstack(finite)) if finite else np.empty((0, 2))
-    births = np.concatenate(essential) if essential else np.empty(0)
-    return points, offsets, births.astype(np.float64), essential_offsets.astype(np.int64)
+    points, offsets = packed.points, packed.offsets
+    finite = np.isfinite(points[:, 1])
+    if finite.all():
+        return points, offsets, np.empty(0), np.zeros_like(offsets)
+    n = len(offsets) - 1
+    diagram = packed.diagram_of_rows()
+    finite_offsets = np.zeros_like(offsets)
+    np.cumsum(np.bincount(diagram[finite], minlength=n), out=finite_offsets[1:])
+    births, owners = points[~finite, 0], diagram[~finite]
+    birth_offsets = np.zeros_like(offsets)
+    np.cumsum(np.bincount(owners, minlength=n), out=birth_offsets[1:])
+    births = births[np.lexsort((births, owners))]
+    return np.ascontiguousarray(points[finite]), finite_offsets, births, birth_offsets
 
 
 def pack_sliced(packed, n_directions: int):

@@ -1,5 +1,6 @@
-"""Pairwise distance matrices between collections of diagrams, in parallel blocks, and
-the block machinery that the diagram kernels share."""
+"""Matrices between collections of diagrams: the one scheduler of blocks of pairs
+(:func:`pair_matrix`, behind the distances and the kernels), the distance matrix, and
+the base of the transformers that return a matrix to their fitted samples."""
 
 from __future__ import annotations
 
@@ -8,14 +9,28 @@ from numbers import Integral, Real
 
 import numpy as np
 from joblib import delayed, effective_n_jobs
+from sklearn.base import ClassNamePrefixFeaturesOutMixin
+from sklearn.utils.validation import check_is_fitted
 
+from .._base import SampleTransformer
 from .._param_validation import Interval, Options, validate_params
 from .._progress import parallel, track
 from ._batch import SLICED, pack, pack_sliced, pair_distances
 from .distances import METRICS, kernel_metric
-from .validation import check_samples
+from .validation import Packed, pack_samples
 
-__all__ = ["pair_matrix", "pairwise_diagram_distances"]
+__all__ = [
+    "PairwiseTransformer",
+    "as_packed",
+    "distance_matrix",
+    "pair_matrix",
+    "pairwise_diagram_distances",
+]
+
+
+def as_packed(samples) -> Packed:
+    """Validated samples (a :class:`Packed`, or tuples of diagrams) as a :class:`Packed`."""
+    return samples if isinstance(samples, Packed) else Packed.from_checked(samples)
 
 
 # Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
@@ -116,8 +131,8 @@ def pairwise_diagram_distances(
     array([[0. , 0.5],
            [0.5, 0. ]])
     """
-    left = check_samples(X)
-    right = None if Y is None else check_samples(Y, n_diagrams=len(left[0]))
+    left = pack_samples(X)
+    right = None if Y is None else pack_samples(Y, n_diagrams=left.n_diagrams)
     shape = (len(left), len(left if right is None else right))
     if out is not None and out.shape != shape:
         raise ValueError(f"out has shape {out.shape}, expected {shape}")
@@ -138,9 +153,13 @@ def pairwise_diagram_distances(
 def distance_matrix(
     left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=0, n_directions=10
 ):
-    """:func:`pairwise_diagram_distances` on validated samples."""
+    """:func:`pairwise_diagram_distances` on validated samples (:class:`Packed`, or
+    lists of tuples of diagrams)."""
     code, order = kernel_metric(metric, order, internal_p)
-    n_parts = len(left[0]) if len(left) else 0
+    left = as_packed(left)
+    right = None if right is None else as_packed(right)
+    n_parts = left.n_diagrams
+    n, m = len(left), len(left if right is None else right)
     packed_left = pack(left)
     packed_right = None if right is None else pack(right)
     if code == SLICED:
@@ -157,8 +176,8 @@ def distance_matrix(
         function,
         packed_left,
         packed_right,
-        len(left),
-        len(left if right is None else right),
+        n,
+        m,
         n_jobs=n_jobs,
         dtype=dtype,
         out=out,
@@ -215,3 +234,68 @@ def pair_matrix(
     if symmetric and diagonal is not None:
         matrix[np.arange(n), np.arange(n)] = diagonal
     return matrix
+
+
+class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
+    """Base of the transformers whose output is a matrix to their fitted samples: the
+    distances and the kernels between diagrams.
+
+    ``fit`` stores the samples (``diagrams_``), ``transform(X)`` returns the
+    ``(len(X), n_fitted)`` matrix to them, ``fit_transform(X)`` the symmetric matrix of
+    ``X``, each unordered pair computed once. The output's columns are named after the
+    fitted samples, ``<class name>0``, ``<class name>1``... Subclasses define
+    ``_fit(X)`` (store the samples; return the symmetric matrix if fitting computed it,
+    else None), ``_validate(X)`` (samples checked against the fitted ones) and
+    ``_matrix(left, right)`` (``right=None``: the symmetric matrix of ``left``).
+    """
+
+    _sample_kind = "diagrams"
+    _requires_fit = True
+
+    def fit(self, X, y=None):
+        """Store the samples to compare with.
+
+        Parameters
+        ----------
+        X : sequence of diagrams or of tuples of diagrams
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        self._fit(X)
+        return self
+
+    def transform(self, X):
+        """The matrix between each sample of ``X`` and each fitted sample.
+
+        Parameters
+        ----------
+        X : sequence of diagrams or of tuples of diagrams
+
+        Returns
+        -------
+        ndarray of shape (len(X), n_fitted)
+        """
+        check_is_fitted(self, "diagrams_")
+        return self._matrix(self._validate(X), self.diagrams_)
+
+    def fit_transform(self, X, y=None):
+        """Fit, and return the symmetric matrix of ``X``, each pair computed once.
+
+        Parameters
+        ----------
+        X : sequence of diagrams or of tuples of diagrams
+        y : ignored
+
+        Returns
+        -------
+        ndarray of shape (len(X), len(X))
+        """
+        matrix = self._fit(X)
+        return self._matrix(self.diagrams_, None) if matrix is None else matrix
+
+    @property
+    def _n_features_out(self) -> int:
+        return len(self.diagrams_)

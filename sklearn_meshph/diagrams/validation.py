@@ -1,4 +1,8 @@
-"""Validation of persistence diagrams and of samples made of several diagrams."""
+"""Validation of persistence diagrams, and the packed format that distances, kernels
+and vectorizers share: every row of every diagram of every sample in one ``(N, 2)``
+array, diagram ``k`` of sample ``i`` being rows ``offsets[i * K + k] : offsets[i * K + k
++ 1]`` (``K`` diagrams per sample). :func:`pack_samples` is the one validator of samples
+of diagrams; checks then cost a few array operations for the whole collection."""
 
 from __future__ import annotations
 
@@ -6,7 +10,7 @@ import numpy as np
 
 from .._base import as_sample_list
 
-__all__ = ["check_diagram", "check_sample", "check_samples"]
+__all__ = ["Packed", "check_diagram", "check_sample", "check_samples", "pack_samples"]
 
 
 def check_diagram(diagram, *, index: int | None = None, part: int | None = None) -> np.ndarray:
@@ -57,7 +61,8 @@ def check_sample(sample, index: int | None = None) -> tuple[np.ndarray, ...]:
 
 
 def check_samples(samples, n_diagrams: int | None = None) -> list[tuple[np.ndarray, ...]]:
-    """Validated samples, all with the same number of diagrams (``n_diagrams`` if given).
+    """Validated samples, all with the same number of diagrams (``n_diagrams`` if given):
+    :func:`pack_samples`, each sample returned as a tuple of diagrams.
 
     Raises
     ------
@@ -65,10 +70,134 @@ def check_samples(samples, n_diagrams: int | None = None) -> list[tuple[np.ndarr
         If a diagram is malformed (naming the sample), if the samples hold different
         numbers of diagrams, or if they do not hold ``n_diagrams``.
     """
-    checked = [check_sample(s, i) for i, s in enumerate(as_sample_list(samples, "diagrams"))]
-    counts = sorted({len(s) for s in checked})
-    if len(counts) > 1:
-        raise ValueError(f"samples have different numbers of diagrams: {counts}")
-    if n_diagrams is not None and counts[0] != n_diagrams:
-        raise ValueError(f"X has {counts[0]} diagrams per sample, the fitted data {n_diagrams}")
-    return checked
+    return pack_samples(samples, n_diagrams).samples()
+
+
+class Packed:
+    """Validated samples of ``n_diagrams`` diagrams each, packed (see the module)."""
+
+    __slots__ = ("first", "n_diagrams", "offsets", "points")
+
+    def __init__(self, points, offsets, n_diagrams, first=0):
+        self.points, self.offsets, self.n_diagrams = points, offsets, n_diagrams
+        self.first = first  # the index of the first sample, in messages
+
+    @classmethod
+    def from_checked(cls, samples) -> Packed:
+        """Samples already validated (tuples of ``(n, 2)`` float64 arrays), packed."""
+        arrays = [diagram for sample in samples for diagram in sample]
+        return cls._of(arrays, len(samples[0]) if len(samples) else 1)
+
+    @classmethod
+    def _of(cls, arrays, n_diagrams) -> Packed:
+        offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
+        np.cumsum([len(a) for a in arrays], out=offsets[1:])
+        points = np.concatenate(arrays) if arrays else _EMPTY.copy()
+        return cls(np.ascontiguousarray(points, dtype=np.float64), offsets, n_diagrams)
+
+    def __len__(self) -> int:
+        return self.n_samples
+
+    @property
+    def n_samples(self) -> int:
+        return (len(self.offsets) - 1) // self.n_diagrams
+
+    def diagram_of_rows(self) -> np.ndarray:
+        """The (flat) diagram index of each row."""
+        sizes = np.diff(self.offsets)
+        return np.repeat(np.arange(len(sizes)), sizes)
+
+    def where(self, row: int) -> str:
+        """``"sample i, diagram k: row r"`` for a row of ``points``."""
+        flat = int(np.searchsorted(self.offsets, row, side="right") - 1)
+        i, k = divmod(flat, self.n_diagrams)
+        return f"sample {self.first + i}, diagram {k}: row {row - self.offsets[flat]}"
+
+    def block(self, a: int, b: int) -> Packed:
+        """Samples ``a:b``, rows copied out (what a parallel task receives)."""
+        k = self.n_diagrams
+        lo, hi = self.offsets[a * k], self.offsets[b * k]
+        offsets = self.offsets[a * k : b * k + 1] - lo
+        return Packed(self.points[lo:hi].copy(), offsets, k, self.first + a)
+
+    def position(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(starts, stops)`` of diagram ``k`` of every sample."""
+        starts = self.offsets[k : len(self.offsets) - 1 : self.n_diagrams]
+        stops = self.offsets[k + 1 :: self.n_diagrams]
+        return np.ascontiguousarray(starts), np.ascontiguousarray(stops)
+
+    def only(self, k: int) -> Packed:
+        """Diagram ``k`` of every sample, as samples of one diagram."""
+        starts, stops = self.position(k)
+        return Packed._of([self.points[a:b] for a, b in zip(starts, stops, strict=True)], 1)
+
+    def samples(self) -> list[tuple[np.ndarray, ...]]:
+        """Each sample as a tuple of its diagrams (views of ``points``)."""
+        k, o, p = self.n_diagrams, self.offsets, self.points
+        return [
+            tuple(p[o[i * k + j] : o[i * k + j + 1]] for j in range(k))
+            for i in range(self.n_samples)
+        ]
+
+    def rows_of_position(self, k: int) -> np.ndarray:
+        """The rows of diagram ``k`` of every sample, in one array."""
+        return self.only(k).points
+
+
+_EMPTY = np.empty((0, 2))
+
+
+def _is_diagram_array(diagram) -> bool:
+    return (
+        type(diagram) is np.ndarray
+        and diagram.dtype == np.float64
+        and diagram.ndim == 2
+        and diagram.shape[1] == 2
+    )
+
+
+def pack_samples(X, n_diagrams: int | None = None) -> Packed:
+    """Validate samples of diagrams and pack them: the validator of every distance,
+    kernel and vectorizer.
+
+    A sample is one diagram (an ``(n, 2)`` array or a list of rows) or a tuple of them;
+    all samples hold the same number of diagrams (``n_diagrams`` if given). Rows are
+    checked as :func:`check_diagram` checks them, with its messages.
+    """
+    samples = as_sample_list(X, "diagrams")
+    arrays, tuples, count = [], [], None
+    for i, sample in enumerate(samples):
+        parts = sample if isinstance(sample, tuple) else (sample,)
+        if count is None:
+            count = len(parts)
+        elif len(parts) != count:
+            raise ValueError(
+                f"samples have different numbers of diagrams: sample 0 has {count}, "
+                f"sample {i} has {len(parts)}"
+            )
+        tuples.append(isinstance(sample, tuple))
+        for k, diagram in enumerate(parts):
+            if _is_diagram_array(diagram):
+                arrays.append(diagram)
+                continue
+            try:
+                array = np.asarray(diagram, dtype=np.float64)
+            except (TypeError, ValueError):
+                array = None
+            if array is None or (array.size and (array.ndim != 2 or array.shape[1] != 2)):
+                check_diagram(diagram, index=i, part=k if tuples[-1] else None)  # raises
+            arrays.append(array if array.size else _EMPTY)
+    if count == 0:
+        raise ValueError("sample 0: an empty tuple holds no diagram")
+    if n_diagrams is not None and count != n_diagrams:
+        raise ValueError(f"X has {count} diagrams per sample, the fitted data {n_diagrams}")
+    packed = Packed._of(arrays, count)
+    points = packed.points
+    with np.errstate(invalid="ignore"):
+        bad = np.isnan(points).any(axis=1) | ~np.isfinite(points[:, 0])
+        bad |= points[:, 1] < points[:, 0]
+    if bad.any():
+        flat = int(np.searchsorted(packed.offsets, np.flatnonzero(bad)[0], side="right") - 1)
+        i, k = divmod(flat, count)
+        check_diagram(arrays[flat], index=i, part=k if tuples[i] else None)  # raises
+    return packed

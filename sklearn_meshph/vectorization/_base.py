@@ -1,201 +1,251 @@
-"""What the vectorizers and kernels share: validated samples of diagrams, the policy for
-essential points, and what ``fit`` learns per diagram position."""
+"""What the vectorizers and kernels share: the policy for infinite points, what ``fit``
+learns per diagram position, the point-weight convention, the checks of parameters at
+the edges of floating point, and the blocks of samples of the vectorizers.
+
+Samples are validated and packed by :func:`~sklearn_meshph.diagrams.pack_samples`, the
+validator of the distances too; every transformer here works on its :class:`Packed`
+samples.
+"""
 
 from __future__ import annotations
 
-from numbers import Integral
+import sys
+import warnings
+from numbers import Integral, Real
 
 import numpy as np
-from joblib import delayed, effective_n_jobs
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list
-from .._param_validation import Options
-from .._progress import parallel
+from .._param_validation import Interval, Options
+from .._progress import map_samples, sample_blocks
+from ..diagrams.validation import Packed, pack_samples
 
 __all__ = [
+    "BANDWIDTH",
     "COMMON_CONSTRAINTS",
-    "ESSENTIAL_POLICIES",
+    "COMMON_PARAMETERS",
+    "INFINITE_POLICIES",
     "DiagramTransformer",
-    "chunks",
+    "PackedVectorizer",
+    "apply_infinite",
+    "check_finite_output",
+    "point_weights",
+    "resolve_range",
 ]
 
-ESSENTIAL_POLICIES = ("drop", "clip", "error")
+INFINITE_POLICIES = ("drop", "clip", "error")
+
+_TINY = float(np.finfo(np.float64).tiny)
+#: The bandwidths whose square, and the peak of whose 2-d Gaussian, are normal floats.
+_BANDWIDTHS = (float(np.sqrt(_TINY)), float(np.sqrt(1.0 / (2.0 * np.pi * _TINY))))
+#: Coordinates beyond this cannot be added or subtracted without overflow.
+_LARGEST_COORDINATE = float(np.finfo(np.float64).max / 4)
+
+#: The constraint of every ``bandwidth``: neither so small that its square underflows
+#: nor so large that the Gaussian's peak does (an image or kernel of silent zeros).
+BANDWIDTH = [Interval(Real, *_BANDWIDTHS, closed="both")]
 
 #: The parameters every vectorizer and kernel has, and their constraints.
 COMMON_CONSTRAINTS: dict = {
-    "essential": [Options(ESSENTIAL_POLICIES)],
+    "infinite": [Options(INFINITE_POLICIES)],
     "n_jobs": [Integral, None],
     "dtype": [Options(("float64", "float32"))],
+    "essential": [Options(("deprecated", *INFINITE_POLICIES))],
 }
 
-# Samples per parallel task at most: bounds the memory of the rows in flight.
-_CHUNK = 2048
+#: Their documentation (indented for a class docstring's Parameters section).
+COMMON_PARAMETERS = """infinite : {"drop", "clip", "error"}, default="drop"
+        Points with infinite death (essential classes): dropped, clipped at the largest
+        finite death of their position among the fitted diagrams (at the largest
+        fitted birth where there is none), or refused.
+    n_jobs : int, default=None
+        Number of parallel jobs (joblib). ``None`` means 1 unless in a
+        :func:`joblib.parallel_backend` context; ``-1`` means all processors. Results
+        are identical for any ``n_jobs``.
+    dtype : {"float64", "float32"}, default="float64"
+        Of the output (computed in float64).
+    essential : {"drop", "clip", "error"}, optional
+        Deprecated name of ``infinite`` (a :class:`FutureWarning`)."""
+
+#: The attributes every vectorizer and kernel learns.
+COMMON_ATTRIBUTES = """n_diagrams_ : int
+        Diagrams per sample.
+    clip_values_ : ndarray of shape (n_diagrams,)
+        Where ``infinite="clip"`` clips the deaths of each position."""
+
+#: The point-weight convention of the images and the kernels.
+WEIGHT_PARAMETER = """weight : {"constant", "persistence"} or callable, default="constant"
+        The weight of each point ``(b, d)``: 1, its persistence ``(d - b) ** power``,
+        or a function of an ``(n, 2)`` array of (birth, death) rows returning ``n``
+        finite weights (called once per non-empty diagram). Weights that vanish on the
+        diagonal, such as the persistence, make the result stable: points near the
+        diagonal (noise) count little.
+    power : float, default=1.0
+        The exponent of ``weight="persistence"`` (ignored by the others)."""
+
+WEIGHT_CONSTRAINTS: dict = {
+    "weight": [Options(("constant", "persistence")), callable],
+    "power": [Interval(Real, 0, None, closed="left")],
+}
 
 
-def chunks(n: int, n_jobs) -> list[tuple[int, int]]:
-    """Consecutive ``(start, stop)`` blocks of samples: a few per worker, each at most
-    ``_CHUNK`` samples."""
-    n_blocks = max(-(-n // _CHUNK), min(n, 4 * effective_n_jobs(n_jobs)))
-    bounds = np.linspace(0, n, n_blocks + 1).astype(int)
-    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+def point_weights(packed: Packed, starts, stops, weight, power=1.0) -> np.ndarray:
+    """The weight of each (birth, death) row of the diagrams ``starts[d]:stops[d]`` of
+    ``packed`` (rows outside them: 0), ``weight`` called once per non-empty diagram when
+    it is a callable: the convention of :class:`PersistenceImage` and the kernels."""
+    points = packed.points
+    if weight == "constant":
+        return np.ones(len(points))
+    if weight == "persistence":
+        with np.errstate(over="ignore"):
+            weights = (points[:, 1] - points[:, 0]) ** float(power)
+    else:
+        weights = np.zeros(len(points))
+        for start, stop in zip(starts, stops, strict=True):
+            if stop == start:
+                continue
+            values = np.asarray(weight(points[start:stop].copy()), dtype=np.float64)
+            if values.size != stop - start:
+                raise ValueError(
+                    f"{packed.where(start).rsplit(':', 1)[0]}: weight must map an (n, 2) "
+                    "array of (birth, death) rows to n finite weights; got "
+                    f"{values.shape} values for {stop - start} rows"
+                )
+            weights[start:stop] = values.reshape(-1)
+    if not np.isfinite(weights).all():
+        row = int(np.flatnonzero(~np.isfinite(weights))[0])
+        raise ValueError(
+            f"{packed.where(row)}: its weight {weights[row]} is not finite (weights must "
+            "be finite: rescale the diagrams or lower power)"
+        )
+    return weights
+
+
+def resolve_range(given, learned, name: str) -> tuple[float, float]:
+    """``(lo, hi)``: the ``given`` ends (None or NaN: the ``learned`` one), refused when
+    infinite, reversed, or wider than float64 can hold."""
+    given = [np.nan if g is None else float(g) for g in given]
+    if any(np.isinf(g) for g in given):
+        raise ValueError(f"{name} must be finite (None or NaN to learn it), got {given}")
+    lo, hi = (float(learn) if np.isnan(g) else g for g, learn in zip(given, learned, strict=True))
+    if lo > hi or (lo == hi and not np.isnan(given).any()):
+        raise ValueError(f"{name} must go from a smaller to a larger value, got ({lo}, {hi})")
+    with np.errstate(over="ignore"):
+        if not np.isfinite(hi - lo):
+            raise ValueError(
+                f"{name} ({lo}, {hi}) is wider than float64 can hold: rescale the diagrams"
+            )
+    return lo, hi
+
+
+def check_finite_output(values: np.ndarray, what: str) -> np.ndarray:
+    """``values`` (one row per sample), refused if an entry overflowed or is NaN."""
+    bad = ~np.isfinite(values)
+    if bad.any():
+        i = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise ValueError(
+            f"sample {i}: its {what} overflow float64; rescale the diagrams (or the "
+            "bandwidth, or the weights)"
+        )
+    return values
 
 
 class DiagramTransformer(SampleTransformer):
     """Base of the transformers whose samples are persistence diagrams (one ``(n, 2)``
     array or a tuple of them, as :class:`LowerStarPersistence` returns).
 
-    ``_fit_packed(X)`` validates the samples and applies the ``essential`` policy
-    (learning, for ``"clip"``, the largest finite death of each position);
-    ``_checked_packed(X)`` does the same at transform time with the fitted values. Both
-    return a :class:`Packed` collection (``.samples()`` gives tuples of diagrams).
+    ``_fit_packed(X)`` validates the samples and applies the ``infinite`` policy
+    (learning, for ``"clip"``, where to clip each position); ``_checked_packed(X)``
+    does the same at transform time with the fitted values. Both return
+    :class:`Packed` samples.
     """
 
     _sample_kind = "diagrams"
     _requires_fit = True
 
+    def _infinite_policy(self, warn: bool = False) -> str:
+        """``infinite``, or ``essential`` when it is set (with a FutureWarning if
+        ``warn``, as ``fit`` does)."""
+        if self.essential == "deprecated":
+            return self.infinite
+        if warn:
+            warnings.warn(
+                f"{type(self).__name__}(essential=...) is renamed infinite=...; essential "
+                "will be removed (LowerStarPersistence's essential keeps its meaning)",
+                FutureWarning,
+                stacklevel=_outside_level(),
+            )
+        return self.essential
+
     def _fit_packed(self, X) -> Packed:
-        """Validate ``X``, learn the clipping value of each position (its largest
-        finite death) and apply the ``essential`` policy."""
+        """Validate ``X``, learn the clipping value of each position (its largest finite
+        death, else its largest birth) and apply the ``infinite`` policy."""
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         SampleTransformer.fit(self, X)
-        packed = pack_samples(X)
+        packed = _checked_magnitude(pack_samples(X))
         self.n_diagrams_ = packed.n_diagrams
-        finite = np.isfinite(packed.points[:, 1])
-        position = packed.diagram_of_rows() % packed.n_diagrams
         self.clip_values_ = np.array(
-            [
-                packed.points[finite & (position == k), 1].max()
-                if (finite & (position == k)).any()
-                else 0.0
-                for k in range(packed.n_diagrams)
-            ]
+            [_clip_value(packed.only(k).points) for k in range(packed.n_diagrams)]
         )
-        return apply_essential(packed, self.essential, self.clip_values_)
+        return apply_infinite(packed, self._infinite_policy(warn=True), self.clip_values_)
 
     def _checked_packed(self, X) -> Packed:
-        """Validate ``X`` against the fitted data and apply the ``essential`` policy."""
+        """Validate ``X`` against the fitted data and apply the ``infinite`` policy."""
         check_is_fitted(self, "n_diagrams_")
-        packed = pack_samples(X, n_diagrams=self.n_diagrams_)
-        return apply_essential(packed, self.essential, self.clip_values_)
+        packed = _checked_magnitude(pack_samples(X, n_diagrams=self.n_diagrams_))
+        return apply_infinite(packed, self._infinite_policy(), self.clip_values_)
 
 
-# The packed path of the vectorizers -------------------------------------------------
-#
-# Every row of every diagram of every sample in one (N, 2) array; diagram k of sample i
-# is rows offsets[i * K + k] : offsets[i * K + k + 1] (K diagrams per sample). Checks and
-# the essential policy then cost a few array operations for the whole collection.
+def _outside_level() -> int:
+    """The ``stacklevel`` of the first frame outside this library and scikit-learn,
+    counted from the function that calls this one."""
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] in (
+        "sklearn_meshph",
+        "sklearn",
+    ):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
-class Packed:
-    """Validated samples of ``n_diagrams`` diagrams each, packed (see above)."""
-
-    __slots__ = ("n_diagrams", "offsets", "points")
-
-    def __init__(self, points, offsets, n_diagrams):
-        self.points, self.offsets, self.n_diagrams = points, offsets, n_diagrams
-
-    @property
-    def n_samples(self) -> int:
-        return (len(self.offsets) - 1) // self.n_diagrams
-
-    def diagram_of_rows(self) -> np.ndarray:
-        """The (flat) diagram index of each row."""
-        sizes = np.diff(self.offsets)
-        return np.repeat(np.arange(len(sizes)), sizes)
-
-    def block(self, a: int, b: int) -> Packed:
-        """Samples ``a:b``, rows copied out (what a parallel task receives)."""
-        k = self.n_diagrams
-        lo, hi = self.offsets[a * k], self.offsets[b * k]
-        return Packed(self.points[lo:hi].copy(), self.offsets[a * k : b * k + 1] - lo, k)
-
-    def position(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(starts, stops)`` of diagram ``k`` of every sample."""
-        starts = self.offsets[k : len(self.offsets) - 1 : self.n_diagrams]
-        stops = self.offsets[k + 1 :: self.n_diagrams]
-        return np.ascontiguousarray(starts), np.ascontiguousarray(stops)
-
-    def samples(self) -> list[tuple[np.ndarray, ...]]:
-        """Each sample as a tuple of its diagrams (views of ``points``)."""
-        k, o, p = self.n_diagrams, self.offsets, self.points
-        return [
-            tuple(p[o[i * k + j] : o[i * k + j + 1]] for j in range(k))
-            for i in range(self.n_samples)
-        ]
-
-    def rows_of_position(self, k: int) -> np.ndarray:
-        starts, stops = self.position(k)
-        if not len(starts):
-            return np.empty((0, 2))
-        return np.concatenate([self.points[a:b] for a, b in zip(starts, stops, strict=True)])
+def _clip_value(points: np.ndarray) -> float:
+    """The largest finite death of ``points``, else their largest birth (-inf if there
+    is no point: an infinite death is then clipped at its birth). Either moves with the
+    diagrams: translating them translates the clipped values."""
+    deaths = points[np.isfinite(points[:, 1]), 1]
+    if len(deaths):
+        return float(deaths.max())
+    return float(points[:, 0].max()) if len(points) else -np.inf
 
 
-_EMPTY = np.empty((0, 2))
-
-
-def pack_samples(X, n_diagrams: int | None = None) -> Packed:
-    """Validate samples of diagrams (the rules of :func:`check_samples`, the same
-    messages) and pack them."""
-    from ..diagrams.validation import check_diagram
-
-    samples = as_sample_list(X, "diagrams")
-    arrays, tuples, count = [], [], None
-    for i, sample in enumerate(samples):
-        parts = sample if isinstance(sample, tuple) else (sample,)
-        if count is None:
-            count = len(parts)
-        elif len(parts) != count:
-            raise ValueError(f"samples have different numbers of diagrams: {count}, {len(parts)}")
-        tuples.append(isinstance(sample, tuple))
-        for k, diagram in enumerate(parts):
-            if (
-                type(diagram) is np.ndarray
-                and diagram.dtype == np.float64
-                and diagram.ndim == 2
-                and diagram.shape[1] == 2
-            ):
-                arrays.append(diagram)
-                continue
-            try:
-                array = np.asarray(diagram, dtype=np.float64)
-            except (TypeError, ValueError):
-                array = None
-            if array is None or (array.size and (array.ndim != 2 or array.shape[1] != 2)):
-                check_diagram(diagram, index=i, part=k if tuples[-1] else None)  # raises
-            arrays.append(array if array.size else _EMPTY)
-    if n_diagrams is not None and count != n_diagrams:
-        raise ValueError(f"X has {count} diagrams per sample, the fitted data {n_diagrams}")
-    sizes = np.fromiter((len(a) for a in arrays), dtype=np.int64, count=len(arrays))
-    offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    points = np.concatenate(arrays) if arrays else _EMPTY.copy()
+def _checked_magnitude(packed: Packed) -> Packed:
+    """``packed``, refused when a finite coordinate is too large to add or subtract."""
     with np.errstate(invalid="ignore"):
-        bad = np.isnan(points).any(axis=1) | ~np.isfinite(points[:, 0])
-        bad |= points[:, 1] < points[:, 0]
-    if bad.any():
-        flat = int(np.searchsorted(offsets, np.flatnonzero(bad)[0], side="right") - 1)
-        i, k = divmod(flat, count)
-        check_diagram(arrays[flat], index=i, part=k if tuples[i] else None)  # raises
-    return Packed(np.ascontiguousarray(points), offsets, count)
+        large = (np.abs(packed.points) > _LARGEST_COORDINATE) & np.isfinite(packed.points)
+    if large.any():
+        row = int(np.flatnonzero(large.any(axis=1))[0])
+        raise ValueError(
+            f"{packed.where(row)} has a coordinate beyond a quarter of the largest float64 "
+            f"({packed.points[row].tolist()}): its persistence or midpoint would overflow; "
+            "rescale the diagrams"
+        )
+    return packed
 
 
-def apply_essential(packed: Packed, policy: str, clip_values=None) -> Packed:
-    """``packed`` with its essential points dropped, clipped at ``clip_values`` (per
-    position) or refused."""
+def apply_infinite(packed: Packed, policy: str, clip_values=None) -> Packed:
+    """``packed`` with its points of infinite death dropped, clipped at ``clip_values``
+    (per position) or refused."""
     infinite = np.isinf(packed.points[:, 1])
     if not infinite.any():
         return packed
-    diagram = packed.diagram_of_rows()
     if policy == "error":
-        first = int(np.flatnonzero(infinite)[0])
-        flat = int(diagram[first])
-        i, k = divmod(flat, packed.n_diagrams)
         raise ValueError(
-            f"sample {i}, diagram {k}: row {first - packed.offsets[flat]} is an essential "
-            "point (death inf); set essential='drop' or 'clip', or drop them upstream "
+            f"{packed.where(int(np.flatnonzero(infinite)[0]))} is an essential point (death "
+            "inf); set infinite='drop' or 'clip', or drop them upstream "
             "(LowerStarPersistence(essential='drop' or 'max'))"
         )
+    diagram = packed.diagram_of_rows()
     if policy == "clip":
         points = packed.points.copy()
         position = diagram[infinite] % packed.n_diagrams
@@ -209,8 +259,10 @@ def apply_essential(packed: Packed, policy: str, clip_values=None) -> Packed:
 
 class PackedVectorizer(DiagramTransformer):
     """Base of the vectorizers: samples packed once, ``_fit_positions(packed)`` learns
-    per position, ``_compute(k, points, starts, stops)`` gives the block of columns of
-    position ``k`` for the diagrams ``starts:stops`` of ``points``."""
+    per position, ``_compute(k, packed, starts, stops)`` gives the block of columns of
+    position ``k`` for the diagrams ``starts:stops`` of ``packed.points``."""
+
+    _output = "features"
 
     def fit(self, X, y=None):
         """Learn what the vectorization needs from the diagrams of each position.
@@ -258,19 +310,16 @@ class PackedVectorizer(DiagramTransformer):
         return self._rows(packed)
 
     def _rows(self, packed: Packed) -> np.ndarray:
-        n_jobs = getattr(self, "n_jobs", None)
-        blocks = chunks(packed.n_samples, n_jobs)
-        if len(blocks) == 1 or effective_n_jobs(n_jobs) == 1:
-            return self._block_rows(packed)
         # The compiled loops release the GIL: threads, unless a parallel_backend says
         # otherwise (then each task carries only its block of samples).
-        tasks = parallel(n_jobs, prefer="threads")(
-            delayed(self._block_rows)(packed.block(a, b)) for a, b in blocks
-        )
-        return np.vstack(list(tasks))
+        blocks = sample_blocks(packed.n_samples, self.n_jobs)
+        if len(blocks) == 1:
+            rows = [self._block_rows(packed)]
+        else:
+            parts = (packed.block(a, b) for a, b in blocks)
+            rows = map_samples(self._block_rows, parts, n_jobs=self.n_jobs, prefer="threads")
+        return check_finite_output(np.vstack(rows), self._output).astype(self.dtype, copy=False)
 
     def _block_rows(self, packed: Packed) -> np.ndarray:
-        columns = [
-            self._compute(k, packed.points, *packed.position(k)) for k in range(packed.n_diagrams)
-        ]
-        return np.hstack(columns).astype(self.dtype, copy=False)
+        columns = [self._compute(k, packed, *packed.position(k)) for k in range(packed.n_diagrams)]
+        return np.hstack(columns)

@@ -8,23 +8,30 @@ from numbers import Integral, Real
 import numpy as np
 
 from .._param_validation import Interval
-from ._base import COMMON_CONSTRAINTS, PackedVectorizer
+from ._base import (
+    COMMON_ATTRIBUTES,
+    COMMON_CONSTRAINTS,
+    COMMON_PARAMETERS,
+    PackedVectorizer,
+    resolve_range,
+)
 from ._compiled import betti_curves, entropy_curves, landscapes, silhouettes
 
-__all__ = ["BettiCurve", "EntropyCurve", "PersistenceLandscape", "Silhouette", "sample_grid"]
+__all__ = ["BettiCurve", "EntropyCurve", "PersistenceLandscape", "Silhouette"]
 
 
-def sample_grid(diagrams, resolution, sample_range, keep_endpoints) -> np.ndarray:
+def _sample_grid(points, resolution, sample_range, keep_endpoints) -> np.ndarray:
     """``resolution`` evenly spaced values over ``sample_range``; a ``None`` or NaN end
-    is the smallest birth or the largest death of ``diagrams``, and, unless
+    is the smallest birth or the largest death of ``points``, and, unless
     ``keep_endpoints``, that end itself is left out (every function here is 0 there):
     the grid has one more step per learned end, as gudhi's."""
-    given = np.full(2, np.nan) if sample_range is None else np.array(sample_range, float)
-    learned = np.isnan(given)
-    points = np.concatenate(list(diagrams) + [np.empty((0, 2))])
+    given = [None, None] if sample_range is None else list(sample_range)
+    if len(given) != 2:
+        raise ValueError(f"sample_range must have 2 entries, got {sample_range!r}")
     data = [points[:, 0].min(), points[:, 1].max()] if len(points) else [0.0, 0.0]
-    lo, hi = np.where(learned, data, given)
-    extra = 0 if keep_endpoints else int(learned.sum())
+    lo, hi = resolve_range(given, data, "sample_range")
+    learned = [g is None or np.isnan(g) for g in given]
+    extra = 0 if keep_endpoints else sum(learned)
     n = resolution + extra
     grid = np.linspace(lo, hi, n) if lo != hi else np.full(n, lo)
     if not keep_endpoints:
@@ -39,30 +46,21 @@ _GRID_CONSTRAINTS: dict = {
     **COMMON_CONSTRAINTS,
 }
 
-_GRID_PARAMETERS = """resolution : int, default=100
+_GRID_PARAMETERS = f"""resolution : int, default=100
         Grid points.
     sample_range : tuple of 2 float, default=None
-        ``(min, max)`` of the grid; ``None`` or NaN ends are learned by ``fit``, per
-        diagram position, as the smallest birth and the largest death of the fitted
-        diagrams.
+        ``(min, max)`` of the grid, increasing and finite; ``None`` or NaN ends are
+        learned by ``fit``, per diagram position, as the smallest birth and the largest
+        death of the fitted diagrams.
     keep_endpoints : bool, default=False
         Whether a learned end is itself a grid point (where the function is 0 or
         trivial); by default the grid is spread over ``resolution + 1`` (or ``+ 2``)
         points and the learned ends left out, as gudhi does.
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Blocks of samples computed in parallel (joblib).
-    dtype : {"float64", "float32"}, default="float64"
-        Of the output (computed in float64)."""
+    {COMMON_PARAMETERS}"""
 
-_GRID_ATTRIBUTES = """grids_ : list of ndarray
+_GRID_ATTRIBUTES = f"""grids_ : list of ndarray
         The grid of each diagram position.
-    n_diagrams_ : int
-        Diagrams per sample.
-    clip_values_ : ndarray of shape (n_diagrams,)
-        The largest finite death of each position (used by ``essential="clip"``)."""
+    {COMMON_ATTRIBUTES}"""
 
 
 class _GridFunction(PackedVectorizer):
@@ -76,17 +74,14 @@ class _GridFunction(PackedVectorizer):
 
     def _fit_positions(self, packed):
         self.grids_ = [
-            sample_grid(
-                [packed.rows_of_position(k)],
-                self.resolution,
-                self.sample_range,
-                self.keep_endpoints,
+            _sample_grid(
+                packed.only(k).points, self.resolution, self.sample_range, self.keep_endpoints
             )
             for k in range(packed.n_diagrams)
         ]
 
-    def _compute(self, k, points, starts, stops):
-        return self._curves(points, starts, stops, self.grids_[k])
+    def _compute(self, k, packed, starts, stops):
+        return self._curves(packed.points, starts, stops, self.grids_[k])
 
     def _column_names(self) -> list[str]:
         return [f"{self._feature}_{g}" for g in range(self.resolution)]
@@ -148,17 +143,19 @@ class PersistenceLandscape(_GridFunction):
         resolution=100,
         sample_range=None,
         keep_endpoints=False,
-        essential="drop",
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.n_landscapes = n_landscapes
         self.resolution = resolution
         self.sample_range = sample_range
         self.keep_endpoints = keep_endpoints
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _curves(self, points, starts, stops, grid):
         return landscapes(points, starts, stops, grid, self.n_landscapes)
@@ -215,17 +212,19 @@ class Silhouette(_GridFunction):
         resolution=100,
         sample_range=None,
         keep_endpoints=False,
-        essential="drop",
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.power = power
         self.resolution = resolution
         self.sample_range = sample_range
         self.keep_endpoints = keep_endpoints
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _curves(self, points, starts, stops, grid):
         weights = (points[:, 1] - points[:, 0]) ** float(self.power)
@@ -236,7 +235,7 @@ class BettiCurve(_GridFunction):
     __doc__ = f"""Betti curves: the number of points alive at each filtration value.
 
     ``beta(x) = #{{j : b_j <= x < d_j}}``, sampled on a grid; with the default
-    ``essential="drop"`` the essential classes do not count (``"clip"`` counts them up
+    ``infinite="drop"`` the essential classes do not count (``"clip"`` counts them up
     to the largest fitted death).
 
     Parameters
@@ -267,16 +266,18 @@ class BettiCurve(_GridFunction):
         resolution=100,
         sample_range=None,
         keep_endpoints=False,
-        essential="drop",
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.resolution = resolution
         self.sample_range = sample_range
         self.keep_endpoints = keep_endpoints
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _curves(self, points, starts, stops, grid):
         return betti_curves(points, starts, stops, grid)
@@ -322,17 +323,19 @@ class EntropyCurve(_GridFunction):
         resolution=100,
         sample_range=None,
         keep_endpoints=False,
-        essential="drop",
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.normalized = normalized
         self.resolution = resolution
         self.sample_range = sample_range
         self.keep_endpoints = keep_endpoints
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _curves(self, points, starts, stops, grid):
         curves = entropy_curves(points, starts, stops, grid)

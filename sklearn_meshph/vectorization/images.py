@@ -2,34 +2,29 @@
 
 from __future__ import annotations
 
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 
-from .._param_validation import Interval, Options
-from ._base import COMMON_CONSTRAINTS, PackedVectorizer
+from .._param_validation import Options
+from ._base import (
+    BANDWIDTH,
+    COMMON_ATTRIBUTES,
+    COMMON_CONSTRAINTS,
+    COMMON_PARAMETERS,
+    WEIGHT_CONSTRAINTS,
+    WEIGHT_PARAMETER,
+    PackedVectorizer,
+    point_weights,
+    resolve_range,
+)
 from ._compiled import images
 
 __all__ = ["PersistenceImage"]
 
 
-def point_weights(points_bp: np.ndarray, weight, sample: str = "") -> np.ndarray:
-    """The weight of each point from its (birth, persistence) coordinates."""
-    if weight == "constant":
-        return np.ones(len(points_bp))
-    if weight == "persistence":
-        return points_bp[:, 1].copy()
-    values = np.asarray(weight(points_bp), dtype=np.float64).reshape(-1)
-    if values.shape != (len(points_bp),) or not np.isfinite(values).all():
-        raise ValueError(
-            f"weight{sample} must map an (n, 2) array of (birth, persistence) rows to n "
-            f"finite weights, got shape {values.shape}"
-        )
-    return values
-
-
 class PersistenceImage(PackedVectorizer):
-    """Persistence images: each diagram as a weighted sum of Gaussians on a grid.
+    __doc__ = f"""Persistence images: each diagram as a weighted sum of Gaussians on a grid.
 
     Each point ``(b, d)`` becomes ``(b, d - b)`` (birth, persistence), weighted, and
     smoothed by an isotropic Gaussian of standard deviation ``bandwidth``; the image is
@@ -41,39 +36,29 @@ class PersistenceImage(PackedVectorizer):
     Parameters
     ----------
     bandwidth : float, default=1.0
-        Standard deviation of the Gaussian, in the diagrams' units.
+        Standard deviation of the Gaussian, in the diagrams' units: neither so small
+        that its square underflows nor so large that the Gaussian's peak does.
     resolution : tuple of 2 int, default=(20, 20)
         Grid points along birth and along persistence.
     im_range : tuple of 4 float, default=None
-        ``(birth_min, birth_max, persistence_min, persistence_max)`` of the grid;
-        ``None`` or NaN entries are learned by ``fit``, per diagram position, as the
-        extremes of the fitted points.
-    sampling : {"point", "pixel"}, default="point"
+        ``(birth_min, birth_max, persistence_min, persistence_max)`` of the grid, each
+        pair increasing and finite; ``None`` or NaN entries are learned by ``fit``, per
+        diagram position, as the extremes of the fitted points. A learned axis of zero
+        width (all births equal, as in Rips H0 diagrams) is widened by ``bandwidth`` on
+        each side.
+    sampling : {{"point", "pixel"}}, default="point"
         ``"point"``: the density at the grid points (gudhi's convention);
         ``"pixel"``: the mass of the Gaussians inside each pixel, the range split into
         ``resolution`` pixels per axis (persim's convention; an image then sums to the
         total weight that falls inside the range).
-    weight : {"constant", "persistence"} or callable, default="constant"
-        Weight of each point: 1, its persistence ``d - b``, or a function of an
-        ``(n, 2)`` array of (birth, persistence) rows returning ``n`` weights. Weighting
-        by persistence makes the image stable (a small change of the diagram moves it
-        little) and makes the diagonal's noise vanish.
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Blocks of samples computed in parallel (joblib).
-    dtype : {"float64", "float32"}, default="float64"
-        Of the output (computed in float64).
+    {WEIGHT_PARAMETER}
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
     im_ranges_ : ndarray of shape (n_diagrams, 4)
         The grid's range of each diagram position.
-    n_diagrams_ : int
-        Diagrams per sample.
-    clip_values_ : ndarray of shape (n_diagrams,)
-        The largest finite death of each position (used by ``essential="clip"``).
+    {COMMON_ATTRIBUTES}
 
     See Also
     --------
@@ -81,13 +66,15 @@ class PersistenceImage(PackedVectorizer):
 
     Notes
     -----
-    With one diagram per sample, ``weight="constant"`` and the same ``im_range``, the
-    output equals ``gudhi.representations.PersistenceImage(bandwidth, weight=lambda x:
-    1, resolution=list(resolution), im_range=...)`` (tested to 1e-10); gudhi learns one
-    range over all diagrams it is fitted on, as we do per position. With
+    With one diagram per sample and the same ``im_range``, the output equals
+    ``gudhi.representations.PersistenceImage(bandwidth, weight=w,
+    resolution=list(resolution), im_range=...)`` (tested), gudhi's weight ``w`` being a
+    function of one (birth, persistence) point: ``lambda x: 1`` for ``"constant"``; a
+    callable here receives (birth, death) rows, as the kernels' weights do. gudhi learns
+    one range over all diagrams it is fitted on, as we do per position. With
     ``sampling="pixel"`` and ``weight="persistence"`` it equals persim's
     ``PersistenceImager(birth_range, pers_range, pixel_size,
-    kernel_params={"sigma": bandwidth ** 2})`` (its default weight, persistence to the
+    kernel_params={{"sigma": bandwidth ** 2}})`` (its default weight, persistence to the
     power 1) transposed, when ``pixel_size`` divides both ranges (tested).
 
     Examples
@@ -99,12 +86,14 @@ class PersistenceImage(PackedVectorizer):
     (1, 6)
     """
 
+    _output = "images"
+
     _parameter_constraints: dict = {
-        "bandwidth": [Interval(Real, 0, None, closed="neither")],
+        "bandwidth": BANDWIDTH,
         "resolution": [tuple, list],
         "im_range": [tuple, list, None],
         "sampling": [Options(("point", "pixel"))],
-        "weight": [Options(("constant", "persistence")), callable],
+        **WEIGHT_CONSTRAINTS,
         **COMMON_CONSTRAINTS,
     }
 
@@ -115,18 +104,22 @@ class PersistenceImage(PackedVectorizer):
         im_range=None,
         sampling="point",
         weight="constant",
-        essential="drop",
+        power=1.0,
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.bandwidth = bandwidth
         self.resolution = resolution
         self.im_range = im_range
         self.sampling = sampling
         self.weight = weight
-        self.essential = essential
+        self.power = power
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _check_params(self) -> None:
         super()._check_params()
@@ -138,21 +131,28 @@ class PersistenceImage(PackedVectorizer):
             raise ValueError(f"im_range must have 4 entries, got {self.im_range!r}")
 
     def _fit_positions(self, packed):
-        given = np.full(4, np.nan) if self.im_range is None else np.array(self.im_range, float)
+        given = [None] * 4 if self.im_range is None else list(self.im_range)
         ranges = []
         for k in range(packed.n_diagrams):
-            points = packed.rows_of_position(k)
+            points = packed.only(k).points
             if len(points):
                 births, persistence = points[:, 0], points[:, 1] - points[:, 0]
                 learned = [births.min(), births.max(), persistence.min(), persistence.max()]
             else:  # nothing to learn from: a unit square at the origin
                 learned = [0.0, 1.0, 0.0, 1.0]
-            ranges.append(np.where(np.isnan(given), learned, given))
+            axes = []
+            for axis, name in ((0, "im_range (births)"), (2, "im_range (persistence)")):
+                lo, hi = resolve_range(given[axis : axis + 2], learned[axis : axis + 2], name)
+                if lo == hi:  # a learned axis of zero width: its pixels would hold nothing
+                    lo, hi = lo - self.bandwidth, hi + self.bandwidth
+                axes += [lo, hi]
+            ranges.append(axes)
         self.im_ranges_ = np.array(ranges)
 
-    def _compute(self, k, points, starts, stops):
+    def _compute(self, k, packed, starts, stops):
+        points = packed.points
+        weights = point_weights(packed, starts, stops, self.weight, self.power)
         bp = np.column_stack([points[:, 0], points[:, 1] - points[:, 0]])
-        weights = point_weights(bp, self.weight)
         lo_x, hi_x, lo_y, hi_y = self.im_ranges_[k]
         pixel = self.sampling == "pixel"
         xs = np.linspace(lo_x, hi_x, self.resolution[0] + pixel)

@@ -11,17 +11,27 @@ from __future__ import annotations
 
 import math
 from functools import partial
-from numbers import Integral, Real
+from numbers import Integral
 
 import numba
 import numpy as np
 
-from .._param_validation import Interval, Options
+from .._param_validation import Interval
 from ..diagrams._assignment import precedes
 from ..diagrams._batch import pack, pack_sliced
 from ..diagrams._sliced import sliced_pairs
-from ..diagrams.pairwise import pair_matrix
-from ._base import COMMON_CONSTRAINTS, DiagramTransformer
+from ..diagrams.pairwise import PairwiseTransformer, as_packed, pair_matrix
+from ._base import (
+    BANDWIDTH,
+    COMMON_ATTRIBUTES,
+    COMMON_CONSTRAINTS,
+    COMMON_PARAMETERS,
+    WEIGHT_CONSTRAINTS,
+    WEIGHT_PARAMETER,
+    DiagramTransformer,
+    check_finite_output,
+    point_weights,
+)
 
 __all__ = [
     "PersistenceScaleSpaceKernel",
@@ -30,79 +40,48 @@ __all__ = [
 ]
 
 
-class _DiagramKernel(DiagramTransformer):
-    """What the three kernels share: ``fit`` stores the finite diagrams, ``transform`` the
-    kernel with them, ``fit_transform`` the symmetric matrix, each pair computed once.
+class _DiagramKernel(DiagramTransformer, PairwiseTransformer):
+    """What the three kernels share: ``fit`` stores the diagrams after the ``infinite``
+    policy, ``transform`` the kernel with them, ``fit_transform`` the symmetric matrix,
+    each pair computed once (:class:`PairwiseTransformer`), on :class:`Packed` samples.
 
-    Subclasses define ``_pack(samples)`` (what the compiled loop reads) and
+    Subclasses define ``_pack(packed)`` (what the compiled loop reads) and
     ``_pairs(n_parts)``, a picklable function ``(left, right, rows, cols)`` returning the
     kernel values of the pairs ``(rows[k], cols[k])``.
     """
 
-    def fit(self, X, y=None):
-        """Store the diagrams to compare with (their finite points, after the
-        ``essential`` policy).
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
+    def _fit(self, X):
         self.diagrams_ = self._fit_packed(X).samples()
-        return self
 
-    def transform(self, X):
-        """The kernel between each sample of ``X`` and each fitted sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (len(X), n_fitted)
-        """
-        return self._matrix(self._checked_packed(X).samples(), self.diagrams_)
-
-    def fit_transform(self, X, y=None):
-        """Fit, and return the symmetric kernel matrix, each pair computed once.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        ndarray of shape (len(X), len(X))
-        """
-        self.fit(X)
-        return self._matrix(self.diagrams_, None)
+    def _validate(self, X):
+        return self._checked_packed(X)
 
     def _matrix(self, left, right):
-        packed_left = self._pack(left)
-        packed_right = None if right is None else self._pack(right)
-        return pair_matrix(
+        left = as_packed(left)
+        right = None if right is None else as_packed(right)
+        matrix = pair_matrix(
             self._pairs(self.n_diagrams_),
-            packed_left,
-            packed_right,
+            self._pack(left),
+            None if right is None else self._pack(right),
             len(left),
             len(left if right is None else right),
             n_jobs=self.n_jobs,
-            dtype=np.dtype(self.dtype),
+            dtype=np.float64,
             diagonal=None,
             desc="kernel",
         )
+        return check_finite_output(matrix, "kernel values").astype(self.dtype, copy=False)
 
 
-_KERNEL_CONSTRAINTS: dict = {
-    "bandwidth": [Interval(Real, 0, None, closed="neither")],
-    **COMMON_CONSTRAINTS,
-}
+_KERNEL_CONSTRAINTS: dict = {"bandwidth": BANDWIDTH, **COMMON_CONSTRAINTS}
+
+_KERNEL_ATTRIBUTES = f"""diagrams_ : list of tuple of ndarray
+        The fitted samples' finite diagrams, after the ``infinite`` policy.
+    {COMMON_ATTRIBUTES}"""
+
+_BANDWIDTH = """bandwidth : float, default=1.0
+        Standard deviation ``s`` of the Gaussians, in the diagrams' units: neither so
+        small that its square underflows nor so large that the Gaussian's peak does."""
 
 
 def _sliced_kernel(left, right, rows, cols, n_parts, bandwidth):
@@ -112,7 +91,7 @@ def _sliced_kernel(left, right, rows, cols, n_parts, bandwidth):
 
 
 class SlicedWassersteinKernel(_DiagramKernel):
-    """Sliced Wasserstein kernel between persistence diagrams (Carrière, Cuturi & Oudot
+    __doc__ = f"""Sliced Wasserstein kernel between persistence diagrams (Carrière, Cuturi & Oudot
     2017), as a precomputed kernel matrix.
 
     ``k(D1, D2) = exp(-SW(D1, D2) / (2 bandwidth^2))``, with ``SW`` the sliced
@@ -127,28 +106,16 @@ class SlicedWassersteinKernel(_DiagramKernel):
     ----------
     bandwidth : float, default=1.0
         The scale ``sigma`` of ``exp(-SW / (2 sigma^2))``; SW is in the diagrams' units,
-        and so is ``sigma^2``.
+        and so is ``sigma^2``: neither so small that its square underflows nor so
+        large that the Gaussian's peak does.
     n_directions : int, default=10
         Number of lines: the angles ``-pi/2 + k pi / (n_directions + 1)``,
         ``k = 0, ..., n_directions - 1`` (see Notes for gudhi's convention).
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Number of parallel jobs over blocks of pairs (joblib). ``None`` means 1 unless
-        in a :func:`joblib.parallel_backend` context; ``-1`` means all processors.
-        Results are identical for any ``n_jobs``.
-    dtype : {"float64", "float32"}, default="float64"
-        Of the returned matrix (computed in float64).
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
-    diagrams_ : list of tuple of ndarray
-        The fitted samples' finite diagrams, after the ``essential`` policy.
-    n_diagrams_ : int
-        Diagrams per sample.
-    clip_values_ : ndarray of shape (n_diagrams,)
-        The largest finite death of each position (used by ``essential="clip"``).
+    {_KERNEL_ATTRIBUTES}
 
     See Also
     --------
@@ -192,16 +159,23 @@ class SlicedWassersteinKernel(_DiagramKernel):
     }
 
     def __init__(
-        self, bandwidth=1.0, n_directions=10, essential="drop", n_jobs=None, dtype="float64"
+        self,
+        bandwidth=1.0,
+        n_directions=10,
+        infinite="drop",
+        n_jobs=None,
+        dtype="float64",
+        essential="deprecated",
     ):
         self.bandwidth = bandwidth
         self.n_directions = n_directions
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
-    def _pack(self, samples):
-        return pack_sliced(pack(samples), self.n_directions)
+    def _pack(self, packed):
+        return pack_sliced(pack(packed), self.n_directions)
 
     def _pairs(self, n_parts):
         return partial(_sliced_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
@@ -253,7 +227,7 @@ def _scale_space_kernel(left, right, rows, cols, n_parts, bandwidth):
 
 
 class PersistenceScaleSpaceKernel(_DiagramKernel):
-    """Persistence scale space kernel between persistence diagrams (Reininghaus, Huber,
+    __doc__ = f"""Persistence scale space kernel between persistence diagrams (Reininghaus, Huber,
     Bauer & Kwitt 2015), as a precomputed kernel matrix.
 
     Each diagram is the heat diffusion of Dirac masses at its points, with the opposite
@@ -267,26 +241,12 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
 
     Parameters
     ----------
-    bandwidth : float, default=1.0
-        Standard deviation ``s`` of the Gaussians, in the diagrams' units.
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Number of parallel jobs over blocks of pairs (joblib). ``None`` means 1 unless
-        in a :func:`joblib.parallel_backend` context; ``-1`` means all processors.
-        Results are identical for any ``n_jobs``.
-    dtype : {"float64", "float32"}, default="float64"
-        Of the returned matrix (computed in float64).
+    {_BANDWIDTH}
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
-    diagrams_ : list of tuple of ndarray
-        The fitted samples' finite diagrams, after the ``essential`` policy.
-    n_diagrams_ : int
-        Diagrams per sample.
-    clip_values_ : ndarray of shape (n_diagrams,)
-        The largest finite death of each position (used by ``essential="clip"``).
+    {_KERNEL_ATTRIBUTES}
 
     See Also
     --------
@@ -326,15 +286,17 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
 
     _parameter_constraints: dict = dict(_KERNEL_CONSTRAINTS)
 
-    def __init__(self, bandwidth=1.0, essential="drop", n_jobs=None, dtype="float64"):
+    def __init__(
+        self, bandwidth=1.0, infinite="drop", n_jobs=None, dtype="float64", essential="deprecated"
+    ):
         self.bandwidth = bandwidth
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
-    def _pack(self, samples):
-        points, offsets, _, _ = pack(samples)
-        return points, offsets
+    def _pack(self, packed):
+        return packed.points, packed.offsets
 
     def _pairs(self, n_parts):
         return partial(_scale_space_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
@@ -381,7 +343,7 @@ def _weighted_gaussian_kernel(left, right, rows, cols, n_parts, bandwidth):
 
 
 class PersistenceWeightedGaussianKernel(_DiagramKernel):
-    """Persistence weighted Gaussian kernel between persistence diagrams (Kusano,
+    __doc__ = f"""Persistence weighted Gaussian kernel between persistence diagrams (Kusano,
     Fukumizu & Hiraoka 2016), as a precomputed kernel matrix.
 
     Each diagram is the sum of Gaussians centred at its points, weighted by a function
@@ -394,34 +356,13 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
 
     Parameters
     ----------
-    bandwidth : float, default=1.0
-        Standard deviation ``s`` of the Gaussians, in the diagrams' units.
-    weight : {"constant", "persistence"} or callable, default="constant"
-        The weight ``w`` of a point ``(b, d)``: 1, ``(d - b) ** power``, or a function
-        of an ``(n, 2)`` array of (birth, death) rows returning ``n`` finite weights
-        (called once per non-empty diagram). Weights that vanish on the diagonal, such
-        as the persistence, make the kernel stable: points near the diagonal (noise)
-        count little.
-    power : float, default=1.0
-        The exponent of ``weight="persistence"`` (ignored by the others).
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Number of parallel jobs over blocks of pairs (joblib). ``None`` means 1 unless
-        in a :func:`joblib.parallel_backend` context; ``-1`` means all processors.
-        Results are identical for any ``n_jobs``.
-    dtype : {"float64", "float32"}, default="float64"
-        Of the returned matrix (computed in float64).
+    {_BANDWIDTH}
+    {WEIGHT_PARAMETER}
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
-    diagrams_ : list of tuple of ndarray
-        The fitted samples' finite diagrams, after the ``essential`` policy.
-    n_diagrams_ : int
-        Diagrams per sample.
-    clip_values_ : ndarray of shape (n_diagrams,)
-        The largest finite death of each position (used by ``essential="clip"``).
+    {_KERNEL_ATTRIBUTES}
 
     See Also
     --------
@@ -457,52 +398,30 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
            [0.   , 0.   , 0.   ]])
     """
 
-    _parameter_constraints: dict = {
-        **_KERNEL_CONSTRAINTS,
-        "weight": [Options(("constant", "persistence")), callable],
-        "power": [Interval(Real, 0, None, closed="left")],
-    }
+    _parameter_constraints: dict = {**_KERNEL_CONSTRAINTS, **WEIGHT_CONSTRAINTS}
 
     def __init__(
         self,
         bandwidth=1.0,
         weight="constant",
         power=1.0,
-        essential="drop",
+        infinite="drop",
         n_jobs=None,
         dtype="float64",
+        essential="deprecated",
     ):
         self.bandwidth = bandwidth
         self.weight = weight
         self.power = power
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
-    def _weights(self, points, offsets) -> np.ndarray:
-        """The weight of each packed point."""
-        if self.weight == "constant":
-            return np.ones(len(points))
-        if self.weight == "persistence":
-            return (points[:, 1] - points[:, 0]) ** float(self.power)
-        weights = np.empty(len(points))
-        for start, stop in zip(offsets[:-1], offsets[1:], strict=True):
-            if stop == start:
-                continue
-            values = np.asarray(self.weight(points[start:stop].copy()), dtype=np.float64)
-            values = values.reshape(-1) if values.size == stop - start else values
-            if values.shape != (stop - start,) or not np.isfinite(values).all():
-                raise ValueError(
-                    "weight must map an (n, 2) array of (birth, death) rows to n finite "
-                    f"weights; got {values.shape} values for {stop - start} rows"
-                    + ("" if np.isfinite(values).all() else ", not all finite")
-                )
-            weights[start:stop] = values
-        return weights
-
-    def _pack(self, samples):
-        points, offsets, _, _ = pack(samples)
-        return points, self._weights(points, offsets), offsets
+    def _pack(self, packed):
+        offsets = packed.offsets
+        weights = point_weights(packed, offsets[:-1], offsets[1:], self.weight, self.power)
+        return packed.points, weights, offsets
 
     def _pairs(self, n_parts):
         return partial(_weighted_gaussian_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))

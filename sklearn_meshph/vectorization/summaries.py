@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import COMMON_CONSTRAINTS, PackedVectorizer
+from ._base import COMMON_ATTRIBUTES, COMMON_CONSTRAINTS, COMMON_PARAMETERS, PackedVectorizer
 from ._compiled import entropies, statistics
 
 __all__ = ["DiagramStatistics", "PersistenceEntropy"]
 
 
 class _Summary(PackedVectorizer):
-    """Per-diagram numbers that need nothing learned but the essential policy."""
+    """Per-diagram numbers that need nothing learned but the ``infinite`` policy."""
 
     def _fit_positions(self, packed):
         pass
@@ -30,7 +30,7 @@ class _Summary(PackedVectorizer):
 
 
 class PersistenceEntropy(_Summary):
-    """Persistence entropy: ``-sum_j p_j log p_j`` with ``p_j`` each point's share of the
+    __doc__ = f"""Persistence entropy: ``-sum_j p_j log p_j`` with ``p_j`` each point's share of the
     diagram's total persistence (Chintakunta et al. 2015; Atienza et al. 2020).
 
     One number per diagram: high when persistence is spread over many points, low when
@@ -42,17 +42,11 @@ class PersistenceEntropy(_Summary):
     normalized : bool, default=False
         Divide by ``log n`` (``n`` points; 0 for ``n <= 1``), so that the value lies in
         [0, 1] whatever the number of points.
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Blocks of samples computed in parallel (joblib).
-    dtype : {"float64", "float32"}, default="float64"
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
-    n_diagrams_ : int
-    clip_values_ : ndarray of shape (n_diagrams,)
+    {COMMON_ATTRIBUTES}
 
     See Also
     --------
@@ -73,21 +67,29 @@ class PersistenceEntropy(_Summary):
 
     _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "normalized": ["boolean"]}
 
-    def __init__(self, normalized=False, essential="drop", n_jobs=None, dtype="float64"):
+    def __init__(
+        self,
+        normalized=False,
+        infinite="drop",
+        n_jobs=None,
+        dtype="float64",
+        essential="deprecated",
+    ):
         self.normalized = normalized
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _names(self):
         return ["entropy"]
 
-    def _compute(self, k, points, starts, stops):
-        return entropies(points, starts, stops, bool(self.normalized))
+    def _compute(self, k, packed, starts, stops):
+        return entropies(packed.points, starts, stops, bool(self.normalized))
 
 
 class DiagramStatistics(_Summary):
-    """Summary statistics of each diagram's points.
+    __doc__ = f"""Summary statistics of each diagram's points.
 
     Per diagram: the number of points, the total, largest and mean persistence, the
     ``quantiles`` of the persistence, and the mean birth and death; an empty diagram
@@ -97,17 +99,11 @@ class DiagramStatistics(_Summary):
     ----------
     quantiles : tuple of float, default=(0.1, 0.25, 0.5, 0.75, 0.9)
         Quantiles of the persistence (linear interpolation).
-    essential : {"drop", "clip", "error"}, default="drop"
-        Points with infinite death: dropped, clipped at the largest finite death of
-        their position among the fitted diagrams, or refused.
-    n_jobs : int, default=None
-        Blocks of samples computed in parallel (joblib).
-    dtype : {"float64", "float32"}, default="float64"
+    {COMMON_PARAMETERS}
 
     Attributes
     ----------
-    n_diagrams_ : int
-    clip_values_ : ndarray of shape (n_diagrams,)
+    {COMMON_ATTRIBUTES}
 
     Examples
     --------
@@ -123,12 +119,18 @@ class DiagramStatistics(_Summary):
     _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [tuple, list]}
 
     def __init__(
-        self, quantiles=(0.1, 0.25, 0.5, 0.75, 0.9), essential="drop", n_jobs=None, dtype="float64"
+        self,
+        quantiles=(0.1, 0.25, 0.5, 0.75, 0.9),
+        infinite="drop",
+        n_jobs=None,
+        dtype="float64",
+        essential="deprecated",
     ):
         self.quantiles = quantiles
-        self.essential = essential
+        self.infinite = infinite
         self.n_jobs = n_jobs
         self.dtype = dtype
+        self.essential = essential
 
     def _check_params(self) -> None:
         super()._check_params()
@@ -143,5 +145,7 @@ class DiagramStatistics(_Summary):
             + ["mean_birth", "mean_death"]
         )
 
-    def _compute(self, k, points, starts, stops):
-        return statistics(points, starts, stops, np.asarray(self.quantiles, dtype=np.float64))
+    def _compute(self, k, packed, starts, stops):
+        return statistics(
+            packed.points, starts, stops, np.asarray(self.quantiles, dtype=np.float64)
+        )
