@@ -55,7 +55,7 @@ from sklearn_meshph import (
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import check_mesh
-from sklearn_meshph.spectral.solve import mesh_eigenpairs
+from sklearn_meshph.spectral.solve import SolveSettings, mesh_eigenpairs
 
 
 def split(pipeline):
@@ -91,22 +91,22 @@ def configurations(memory, n_jobs):
     )
     return {
         "default (make_mesh_distance())": split(default),
-        "0.1 default (eigenfunctions 1-3, symmetric H0, bottleneck)": split(
-            make_mesh_distance("0.1", **preset)
+        '"eigenfunctions", 0.1\'s default (eigenfunctions 1-3, symmetric H0, bottleneck)': split(
+            make_mesh_distance("eigenfunctions", **preset)
         ),
         "paper literal (graph Laplacian, Fiedler vector, sublevel H0, bottleneck)": split(
             make_mesh_distance("paper", **preset)
         ),
         "Shape-DNA 7, Euclidean": (
             LaplacianEigenTransformer(random_state=0, memory=memory, n_jobs=n_jobs, **dna),
-            make_pipeline(ShapeDNA(n_eigenvalues=7), FeatureDistance(metric="euclidean")),
+            make_pipeline(ShapeDNA(n_eigenpairs=8), FeatureDistance(metric="euclidean")),
         ),
         "Shape-DNA 30, Canberra (preset shape-dna)": split(
             make_mesh_distance("shape-dna", **preset)
         ),
         "Shape-DNA 49, Canberra": (
             LaplacianEigenTransformer(random_state=0, memory=memory, n_jobs=n_jobs, **dna),
-            make_pipeline(ShapeDNA(n_eigenvalues=49), FeatureDistance()),
+            make_pipeline(ShapeDNA(n_eigenpairs=50), FeatureDistance()),
         ),
         "eigenfunctions 1-5 alone, extended, W1": alone(
             "eigenfunctions", n_jobs, memory, eigen_index=(1, 2, 3, 4, 5), n_eigenpairs=50
@@ -255,12 +255,12 @@ def gh_comparator(meshes, y, n_jobs, results, name):
     print(f"  ({N_SAMPLES} farthest-point samples per mesh, {backend[0]} {backend[1]})")
 
 
-def solve_memory(mesh, n_eigs):
-    """Peak traced memory (MB) of one mesh's cleaning and eigensolve of n_eigs pairs."""
+def solve_memory(mesh, n_eigenpairs):
+    """Peak traced memory (MB) of one mesh's cleaning and eigensolve of n_eigenpairs pairs."""
     vertices, faces = check_mesh(mesh)
-    mesh_eigenpairs(vertices, faces, "cotangent", "area", "largest", n_eigs, 0, 0)  # warm
+    mesh_eigenpairs(vertices, faces, SolveSettings(), n_eigenpairs, 0, 0)  # warm
     tracemalloc.start()
-    mesh_eigenpairs(vertices, faces, "cotangent", "area", "largest", n_eigs, 0, 0)
+    mesh_eigenpairs(vertices, faces, SolveSettings(), n_eigenpairs, 0, 0)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return peak / 2**20
