@@ -189,12 +189,39 @@ def test_index_beyond_the_vertex_count():
 
 
 @pytest.mark.parametrize(
-    "params",
-    [{"eigen_index": -1}, {"eigen_index": ()}, {"eigen_index": (1, -2)}, {"laplacian": "x"}],
+    "params, message",
+    [
+        ({"eigen_index": -1}, "'eigen_index' parameter"),
+        ({"eigen_index": ()}, "eigen_index must be .* a non-empty tuple"),
+        ({"eigen_index": (1, -2)}, r"eigen_index must be a non-negative int.*got \(1, -2\)"),
+        ({"eigen_index": (1, 1.5)}, r"eigen_index must be a non-negative int.*got \(1, 1.5\)"),
+        ({"laplacian": "x"}, "'laplacian' parameter .* 'cotangent', 'graph'"),
+        ({"n_eigenpairs": 1}, "'n_eigenpairs' parameter"),
+        ({"n_scales": 0}, "'n_scales' parameter"),
+        # Seeds numpy cannot take: refused as parameters, not blamed on a mesh.
+        ({"random_state": -1}, r"^The 'random_state' parameter .*\[0, 2\*\*32 - 1\].* Got -1"),
+        ({"random_state": 2**32}, r"^The 'random_state' parameter .* Got 4294967296"),
+        ({"random_state": 1.5}, r"^The 'random_state' parameter .* Got 1.5"),
+        ({"random_state": "0"}, r"^The 'random_state' parameter .* Got '0'"),
+    ],
 )
-def test_invalid_parameters(params):
-    with pytest.raises(ValueError):
+def test_invalid_parameters(params, message):
+    with pytest.raises(ValueError, match=message):
         LaplacianEigenTransformer(**params).fit([bumpy(1)])
+    with pytest.raises(ValueError, match=message):
+        LaplacianEigenTransformer(**params).transform([bumpy(1)])
+
+
+def test_the_constant_eigenfunction_warns_that_it_says_nothing():
+    from sklearn_meshph.spectral import ConstantEigenfunctionWarning
+
+    with pytest.warns(ConstantEigenfunctionWarning, match="eigen_index 0 is the constant"):
+        field = LaplacianEigenTransformer(eigen_index=(0, 1)).fit_transform([bumpy(1)])[0]
+    np.testing.assert_allclose(field.values[:, 0], field.values[0, 0], rtol=1e-8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConstantEigenfunctionWarning)
+        LaplacianEigenTransformer(eigen_index=1).fit_transform([bumpy(1)])
+        LaplacianEigenTransformer(eigen_index=0, signature="hks").fit_transform([bumpy(1)])
 
 
 def test_single_mesh_instead_of_a_sequence_is_refused():

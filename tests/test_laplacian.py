@@ -227,13 +227,31 @@ def test_results_are_bitwise_reproducible_and_signs_fixed(solver):
     assert (skew[1:] > 0).all()
 
 
-def test_tiny_mesh_uses_the_dense_path_and_checks_n_eigs():
+def test_tiny_mesh_uses_the_dense_path_and_checks_n_eigenpairs():
     vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
     values, vectors = laplacian_eigenfunctions((vertices, [[0, 1, 2]]), 3)
     assert values.shape == (3,) and vectors.shape == (3, 3)
     assert np.isfinite(vectors).all()
-    with pytest.raises(ValueError, match="n_eigs must be between 1 and 3"):
+    with pytest.raises(ValueError, match="n_eigenpairs must be between 1 and 3"):
         laplacian_eigenfunctions((vertices, [[0, 1, 2]]), 4)
+
+
+def test_the_former_n_eigs_keyword_still_works_with_a_future_warning():
+    vertices, faces = irregular_ellipsoid(2)
+    with pytest.warns(FutureWarning, match="renamed n_eigenpairs"):
+        old = laplacian_eigenfunctions((vertices, faces), n_eigs=4)
+    new = laplacian_eigenfunctions((vertices, faces), n_eigenpairs=4)
+    np.testing.assert_array_equal(old[0], new[0])
+    with pytest.raises(TypeError, match="give n_eigenpairs only"):
+        laplacian_eigenfunctions((vertices, faces), 4, n_eigs=4)
+    with pytest.raises(TypeError, match="needs n_eigenpairs"):
+        laplacian_eigenfunctions((vertices, faces))
+
+
+@pytest.mark.parametrize("seed", [-1, 2**32, 1.5, "0"])
+def test_invalid_seeds_are_refused_as_parameters(seed):
+    with pytest.raises(ValueError, match="'random_state' parameter of laplacian_eigenfunctions"):
+        laplacian_eigenfunctions(irregular_ellipsoid(1), 2, random_state=seed)
 
 
 def test_degenerate_faces_do_not_change_the_spectrum():

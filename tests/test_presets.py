@@ -46,11 +46,11 @@ def test_default_separates_the_synthetic_classes(shapes, default_matrix):
     assert np.mean(y[np.argmin(matrix, axis=1)] == y) >= 0.9  # chance is 1/6
 
 
-def test_the_v01_and_paper_presets_are_the_estimators_they_name(shapes):
+def test_the_eigenfunctions_and_paper_presets_are_the_estimators_they_name(shapes):
     meshes, _ = shapes
     meshes = meshes[:6]
     chains = {
-        "0.1": (
+        "eigenfunctions": (
             LaplacianEigenTransformer(random_state=0),
             LowerStarPersistence(),
             DiagramDistance(),
@@ -67,6 +67,9 @@ def test_the_v01_and_paper_presets_are_the_estimators_they_name(shapes):
         expected = distance.fit_transform(persistence.fit_transform(eigen.fit_transform(meshes)))
         pipe = make_mesh_distance(preset, random_state=0)
         np.testing.assert_array_equal(pipe.fit_transform(meshes), expected)
+    with pytest.warns(FutureWarning, match="'0.1' is renamed 'eigenfunctions'"):
+        former = make_mesh_distance("0.1")
+    assert str(former) == str(make_mesh_distance("eigenfunctions"))
 
 
 def test_every_preset_fits_clones_and_pickles(shapes):
@@ -83,8 +86,51 @@ def test_every_preset_fits_clones_and_pickles(shapes):
 
 
 def test_an_unknown_preset_is_refused_with_the_choices():
-    with pytest.raises(ValueError, match="paper"):
+    with pytest.raises(ValueError, match="'preset' parameter .*'eigenfunctions', 'paper'"):
         make_mesh_distance("best")
+
+
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"memory": 3}, "'memory' parameter"),
+        ({"memory": ""}, "memory must be a folder.*got an empty path"),
+        ({"random_state": -1}, r"'random_state' parameter .*\[0, 2\*\*32 - 1\]"),
+        ({"random_state": 2**32}, "'random_state' parameter"),
+        ({"random_state": 0.5}, "'random_state' parameter"),
+        ({"random_state": "seed"}, "'random_state' parameter"),
+        ({"n_jobs": "all"}, "'n_jobs' parameter"),
+    ],
+)
+def test_make_mesh_distance_validates_its_parameters(params, message):
+    with pytest.raises(ValueError, match=message):
+        make_mesh_distance(**params)
+
+
+def _count_solves(monkeypatch):
+    """A list that grows by one for every mesh the eigen stage actually solves."""
+    from sklearn_meshph.spectral import transformer
+
+    solves = []
+    solve = transformer.mesh_eigenpairs
+
+    def counting(*args):
+        solves.append(len(args[0]))
+        return solve(*args)
+
+    monkeypatch.setattr(transformer, "mesh_eigenpairs", counting)
+    return solves
+
+
+def test_the_default_pipeline_caches_each_mesh_once_and_repeats(shapes, tmp_path, monkeypatch):
+    meshes, _ = shapes
+    meshes = meshes[:6]
+    solves = _count_solves(monkeypatch)
+    first = make_mesh_distance(memory=str(tmp_path)).fit_transform(meshes)
+    assert len(solves) == len(meshes)
+    second = make_mesh_distance(memory=str(tmp_path)).fit_transform(meshes)
+    assert len(solves) == len(meshes)  # every mesh read from the cache
+    np.testing.assert_array_equal(first, second)
 
 
 def test_default_is_invariant_to_rigid_motion_scale_and_nearly_to_resolution(shapes):
@@ -115,20 +161,25 @@ def test_default_does_not_depend_on_the_solver_start_vector():
     np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-9)
 
 
-def test_a_grid_over_weights_and_signature_parameters_solves_each_mesh_once(shapes, tmp_path):
+@pytest.mark.parametrize("memory", ["folder", "joblib"])
+def test_a_grid_over_weights_and_signature_parameters_solves_each_mesh_once(
+    shapes, tmp_path, monkeypatch, memory
+):
+    # With the default random_state: the start vector's seed is in the cache key, and the
+    # fixed default keeps it the same in every fit of the search.
     meshes, y = shapes
-    memory = joblib.Memory(tmp_path, verbose=0)
+    solves = _count_solves(monkeypatch)
+    folder = str(tmp_path) if memory == "folder" else joblib.Memory(tmp_path, verbose=0)
     model = make_pipeline(
-        make_mesh_distance(memory=memory, random_state=0),
-        KNeighborsClassifier(1, metric="precomputed"),
+        make_mesh_distance(memory=folder), KNeighborsClassifier(1, metric="precomputed")
     )
     grid = {
         "pipeline__eigen__n_scales": [3, 5],
         "pipeline__eigen__signature": ["hks", "log-hks"],
         "pipeline__distance__weights": [{"ext0": 0.5, "dna": 0.5}, {"dna": 0.0}],
-        "pipeline__distance__ord1__distance__order": [1.0, 2.0],
     }
-    search = GridSearchCV(model, grid, cv=StratifiedKFold(2)).fit(meshes, y)
+    search = GridSearchCV(model, grid, cv=StratifiedKFold(2), n_jobs=1).fit(meshes, y)
+    assert len(solves) == len(meshes)  # 8 candidates, 2 folds, a refit: one solve each
     assert sum(1 for _ in tmp_path.rglob("header.json")) == len(meshes)
     assert search.best_score_ >= 0.8
 

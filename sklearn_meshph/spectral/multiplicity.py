@@ -58,8 +58,9 @@ def warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -
         open_ended = not complete and close[-1] == len(values) - 1
         lam = values[i]
         others = np.delete(values, close)
-        gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
-        spread = (values[close].max() - values[close].min()) / abs(lam)
+        with np.errstate(divide="ignore", invalid="ignore"):  # lam = 0: a broken operator
+            gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
+            spread = (values[close].max() - values[close].min()) / abs(lam)
         warnings.warn(
             f"sample {sample}: eigenvalue {i} ({lam:.6g}) is repeated with multiplicity "
             f"{'at least ' if open_ended else ''}{len(close)} (eigenvalues {close[0]}-"
