@@ -1,5 +1,6 @@
 """CombinedDistance: the contract of a weighted sum of normalized distance matrices."""
 
+import itertools
 import pickle
 
 import joblib
@@ -32,7 +33,7 @@ def fields_and_labels():
 def parts():
     return [
         ("diagrams", make_pipeline(LowerStarPersistence(), DiagramDistance())),
-        ("dna", make_pipeline(ShapeDNA(n_eigenvalues=20), FeatureDistance())),
+        ("dna", make_pipeline(ShapeDNA(n_eigenpairs=21), FeatureDistance())),
     ]
 
 
@@ -46,7 +47,7 @@ def test_the_weighted_sum_of_median_normalized_parts(fields_and_labels):
     combined = CombinedDistance(parts(), weights={"dna": 0.25})
     matrix = combined.fit_transform(train)
     a = make_pipeline(LowerStarPersistence(), DiagramDistance()).fit(train)
-    b = make_pipeline(ShapeDNA(n_eigenvalues=20), FeatureDistance()).fit(train)
+    b = make_pipeline(ShapeDNA(n_eigenpairs=21), FeatureDistance()).fit(train)
     da, db = a.transform(train), b.transform(train)
     expected = da / off_diagonal_median(da) + 0.25 * db / off_diagonal_median(db)
     np.testing.assert_allclose(matrix, expected, rtol=1e-12)
@@ -83,10 +84,10 @@ def test_parameters_clone_and_pickle(fields_and_labels):
     fields, _ = fields_and_labels
     combined = CombinedDistance(parts(), weights={"dna": 2.0})
     params = combined.get_params()
-    assert params["dna__shapedna__n_eigenvalues"] == 20
-    copy = clone(combined).set_params(dna__shapedna__n_eigenvalues=10, weights=None)
-    assert copy.get_params()["dna__shapedna__n_eigenvalues"] == 10
-    assert combined.get_params()["dna__shapedna__n_eigenvalues"] == 20
+    assert params["dna__shapedna__n_eigenpairs"] == 21
+    copy = clone(combined).set_params(dna__shapedna__n_eigenpairs=11, weights=None)
+    assert copy.get_params()["dna__shapedna__n_eigenpairs"] == 11
+    assert combined.get_params()["dna__shapedna__n_eigenpairs"] == 21
     fitted = combined.fit(fields[:8])
     restored = pickle.loads(pickle.dumps(fitted))
     np.testing.assert_array_equal(restored.transform(fields[8:]), fitted.transform(fields[8:]))
@@ -111,8 +112,89 @@ def test_a_part_that_separates_nothing_adds_nothing(fields_and_labels):
     h1 = make_pipeline(
         LowerStarPersistence(filtration="extended", parts=("essential H1",)), DiagramDistance()
     )
-    dna = make_pipeline(ShapeDNA(n_eigenvalues=20), FeatureDistance())
+    dna = make_pipeline(ShapeDNA(n_eigenpairs=21), FeatureDistance())
     combined = CombinedDistance([("h1", h1), ("dna", dna)]).fit(fields[:8])
     assert combined.scales_["h1"] == 1.0
     alone = CombinedDistance([("dna", dna)]).fit(fields[:8])
     np.testing.assert_allclose(combined.transform(fields[8:]), alone.transform(fields[8:]))
+
+
+def vector_parts():
+    return [("canberra", FeatureDistance()), ("cityblock", FeatureDistance(metric="cityblock"))]
+
+
+@pytest.mark.parametrize(
+    ("weights", "message"),
+    [
+        ({"canberra": -1.0}, "weights"),
+        ({"canberra": np.inf}, "weights"),
+        ({"canberra": np.nan}, "weights"),
+        ([1.0, -0.5], "weights"),
+        ("canberra", "weights"),
+        ({"spectrum": 1.0}, r"unknown parts \['spectrum'\]"),
+        ([1.0, 2.0, 3.0], "3 numbers for 2 parts"),
+    ],
+)
+def test_weights_are_finite_non_negative_and_name_parts(weights, message):
+    X = np.random.default_rng(0).random((6, 3))
+    with pytest.raises(ValueError, match=message):
+        CombinedDistance(vector_parts(), weights=weights).fit(X)
+
+
+def test_weights_by_name_or_one_per_part():
+    X = np.random.default_rng(1).random((6, 3))
+    by_name = CombinedDistance(vector_parts(), weights={"cityblock": 2.0}).fit_transform(X)
+    by_order = CombinedDistance(vector_parts(), weights=[1.0, 2.0]).fit_transform(X)
+    np.testing.assert_array_equal(by_name, by_order)
+    zero = CombinedDistance(vector_parts(), weights=[0.0, 1.0]).fit_transform(X)
+    alone = CombinedDistance(vector_parts()[1:]).fit_transform(X)
+    np.testing.assert_allclose(zero, alone, rtol=1e-12)
+
+
+def test_transform_reads_the_fitted_parts_and_weights():
+    X = np.random.default_rng(2).random((8, 3))
+    combined = CombinedDistance(vector_parts(), weights={"cityblock": 2.0}).fit(X[:6])
+    reference = combined.transform(X[6:])
+    combined.set_params(weights={"cityblock": 0.0}, cityblock__metric="euclidean")
+    combined.transformer_list[0][1].set_params(metric="cosine")
+    np.testing.assert_array_equal(combined.transform(X[6:]), reference)
+    assert combined.weights_ == {"canberra": 1.0, "cityblock": 2.0}
+    assert combined.parts_[1][1].metric == "cityblock"
+    assert not np.array_equal(combined.fit(X[:6]).transform(X[6:]), reference)
+
+
+@pytest.mark.parametrize("order", list(itertools.permutations(range(4))))
+def test_nested_set_params_does_not_depend_on_keyword_order(order):
+    """A new transformer_list, a part replaced by name, nested and own parameters: the
+    same result in every order of the keywords."""
+    new_parts = [
+        ("ord1", make_pipeline(FeatureDistance(metric="cityblock"))),
+        ("dna", FeatureDistance()),
+    ]
+    items = [
+        ("weights", {"ord1": 2.0}),
+        ("ord1__featuredistance__metric", "chebyshev"),
+        ("transformer_list", new_parts),
+        ("dna", FeatureDistance(metric="braycurtis")),
+    ]
+    combined = CombinedDistance(vector_parts())
+    combined.set_params(**dict(items[k] for k in order))
+    params = combined.get_params()
+    assert [name for name, _ in combined.transformer_list] == ["ord1", "dna"]
+    assert params["ord1__featuredistance__metric"] == "chebyshev"
+    assert params["dna__metric"] == "braycurtis"
+    assert params["weights"] == {"ord1": 2.0}
+    with pytest.raises(ValueError, match="Invalid parameter 'nothing'"):
+        combined.set_params(ord1__nothing=1)
+
+
+def test_feature_names_and_pandas_output_of_vector_distances():
+    X = np.random.default_rng(3).random((5, 3))
+    for estimator, prefix in [
+        (FeatureDistance(), "featuredistance"),
+        (CombinedDistance(vector_parts()), "combineddistance"),
+    ]:
+        frame = estimator.set_output(transform="pandas").fit_transform(X)
+        assert list(frame.columns) == [f"{prefix}{i}" for i in range(5)]
+        assert list(estimator.get_feature_names_out()) == list(frame.columns)
+        assert list(estimator.transform(X[:2]).columns) == list(frame.columns)

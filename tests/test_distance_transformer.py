@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from joblib import parallel_backend
+from sklearn.exceptions import NotFittedError
 
 from sklearn_meshph import (
     DiagramDistance,
@@ -227,3 +228,47 @@ def test_median_normalization_of_a_position_that_separates_nothing():
         [s[0] for s in samples]
     )
     np.testing.assert_allclose(matrix, expected / est.scales_[0], rtol=1e-12)
+
+
+def test_infinite_order_with_median_normalization_takes_the_maximum():
+    """The l_inf norm of the scaled per-position distances, not all ones (the old
+    ``(sum d^q)^(1/q)`` at ``q = inf``)."""
+    samples = random_diagrams(7, seed=6, parts=3)
+    est = DiagramDistance(metric="wasserstein", order=np.inf, normalization="median")
+    matrix = est.fit_transform(samples)
+    per = [pairwise_diagram_distances([s[k] for s in samples]) for k in range(3)]
+    expected = np.maximum.reduce([m / s for m, s in zip(per, est.scales_, strict=True)])
+    np.testing.assert_allclose(matrix, expected, rtol=1e-12)
+    assert len(np.unique(matrix[np.triu_indices(7, 1)])) > 1
+    bottleneck = DiagramDistance(metric="bottleneck", normalization="median")
+    np.testing.assert_allclose(matrix, bottleneck.fit_transform(samples), rtol=1e-12)
+    np.testing.assert_allclose(est.transform(samples[:2]), matrix[:2], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [{"metric": "wasserstein"}, {"order": 1.0}, {"normalization": "none"}, {"internal_p": 2.0}],
+)
+def test_transform_refuses_distance_parameters_changed_after_fit(change):
+    samples = random_diagrams(6, seed=7, parts=2)
+    est = DiagramDistance(metric="bottleneck", normalization="median").fit(samples)
+    reference = est.transform(samples[:2])
+    est.set_params(n_jobs=2, verbose=0, dtype="float32")  # how, not what: allowed
+    np.testing.assert_allclose(est.transform(samples[:2]), reference, rtol=1e-6)
+    est.set_params(**change)
+    name = next(iter(change))
+    with pytest.raises(NotFittedError, match=f"{name}=.*fitted with.*call fit again"):
+        est.transform(samples[:2])
+    # Fitting again learns the scales under the new parameters.
+    assert est.fit(samples).transform(samples[:2]).shape == (2, 6)
+
+
+def test_feature_names_and_pandas_output():
+    samples = random_diagrams(5, seed=8)
+    est = DiagramDistance().fit(samples)
+    assert list(est.get_feature_names_out()) == [f"diagramdistance{i}" for i in range(5)]
+    frame = DiagramDistance().set_output(transform="pandas").fit_transform(samples)
+    assert list(frame.columns) == list(est.get_feature_names_out())
+    np.testing.assert_array_equal(frame.to_numpy(), est.transform(samples))
+    with pytest.raises(NotFittedError, match="not fitted"):
+        DiagramDistance().get_feature_names_out()

@@ -16,8 +16,12 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    make_mesh_distance,
     make_shapes,
 )
+from sklearn_meshph.pipelines import PRESETS
+
+pd = pytest.importorskip("pandas")
 
 
 @pytest.fixture(scope="module")
@@ -96,3 +100,32 @@ def test_moved_rescaled_and_refined_copies_are_classified_like_originals(shapes)
         rotation = Rotation.random(random_state=rng.integers(1 << 31)).as_matrix()
         copies.append((vertices @ rotation.T * rng.uniform(0.2, 5.0) + rng.normal(size=3), faces))
     np.testing.assert_array_equal(fitted.predict(copies), y)
+
+
+@pytest.mark.parametrize("preset", ["default", "paper", "shape-dna"])
+def test_pandas_output_end_to_end(preset, tmp_path):
+    """``set_output(transform="pandas")`` on the pipeline configures every step: the
+    stages of fields and diagrams keep theirs, the distances come out as DataFrames
+    (the presets: a CombinedDistance, a pipeline of diagrams, Shape-DNA's table)."""
+    assert preset in PRESETS
+    meshes, y = make_shapes(n_per_class=2, random_state=3, return_X_y=True)
+    memory = joblib.Memory(tmp_path, verbose=0)
+    frame = make_mesh_distance(preset, memory=memory).set_output(transform="pandas")
+    frame = frame.fit_transform(meshes)
+    assert isinstance(frame, pd.DataFrame) and frame.shape == (len(meshes), len(meshes))
+    assert frame.columns[0].endswith("distance0")
+    np.testing.assert_array_equal(
+        frame.to_numpy(), make_mesh_distance(preset, memory=memory).fit_transform(meshes)
+    )
+    model = make_pipeline(
+        make_mesh_distance(preset, memory=memory),
+        KNeighborsClassifier(n_neighbors=1, metric="precomputed"),
+    )
+    expected = model.fit(meshes[::2], y[::2]).predict(meshes[1::2])
+    model.set_output(transform="pandas").fit(meshes[::2], y[::2])
+    np.testing.assert_array_equal(model.predict(meshes[1::2]), expected)
+    # The stages of fields and diagrams have no feature names (their output is not a
+    # table): ask the distance itself.
+    last = model[0][-1]
+    names = (last[-1] if hasattr(last, "steps") else last).get_feature_names_out()
+    assert len(names) == len(meshes[::2]) and names[0].endswith("distance0")
