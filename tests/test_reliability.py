@@ -10,7 +10,7 @@ import pytest
 import trimesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from hypothesis.extra.numpy import arrays
+from mesh_strategies import CORRUPTIONS, meshes
 from sklearn.neighbors import KNeighborsClassifier
 from sklearn.pipeline import make_pipeline
 
@@ -18,6 +18,7 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    MeshCleaningWarning,
     RepeatedEigenvalueWarning,
     bottleneck_distance,
     make_shapes,
@@ -155,41 +156,49 @@ def test_bad_diagrams_are_refused_naming_the_sample(case):
             distance(good, bad)
 
 
-coordinates = st.floats(-10, 10, allow_nan=False, width=64)
-
-
-@st.composite
-def small_meshes(draw):
-    n = draw(st.integers(4, 10))
-    vertices = draw(arrays(np.float64, (n, 3), elements=coordinates))
-    faces = draw(arrays(np.int64, (draw(st.integers(2, 16)), 3), elements=st.integers(0, n - 1)))
-    return vertices, faces
-
-
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
-    meshes=st.lists(small_meshes(), min_size=2, max_size=3),
+    drawn=st.lists(meshes(), min_size=2, max_size=3),
     filtration=st.sampled_from(["symmetric", "sublevel", "extended"]),
     metric=st.sampled_from(["bottleneck", "wasserstein"]),
 )
-def test_random_meshes_through_the_whole_pipeline(meshes, filtration, metric):
-    """Finite symmetric distances with a zero diagonal, or a documented error."""
+def _check_random_meshes_through_the_pipeline(outcomes, drawn, filtration, metric):
+    """Valid meshes give finite symmetric distances with a zero diagonal; with
+    corrupted ones, the error names one of them (samples are solved largest first) with
+    its corruption's message."""
     steps = make_pipeline(
         LaplacianEigenTransformer(eigen_index=1),
         LowerStarPersistence(filtration=filtration),
         DiagramDistance(metric=metric),
     )
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RepeatedEigenvalueWarning)
-            matrix = steps.fit_transform(meshes)
-    except ValueError as exc:
-        assert str(exc).startswith("sample ")
-        assert "degenerate" in str(exc) or "eigen_index" in str(exc)
+    samples = [mesh for mesh, _ in drawn]
+    damaged = [
+        f"sample {i}: .*{CORRUPTIONS[damage][1]}"
+        for i, (_, damage) in enumerate(drawn)
+        if damage is not None
+    ]
+    if damaged:
+        with pytest.raises(ValueError, match=f"^({'|'.join(damaged)})"):
+            steps.fit_transform(samples)
+        outcomes.append("refused")
         return
-    assert matrix.shape == (len(meshes), len(meshes))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RepeatedEigenvalueWarning)
+        warnings.simplefilter("ignore", MeshCleaningWarning)  # parts leave vertices out
+        matrix = steps.fit_transform(samples)
+    assert matrix.shape == (len(samples), len(samples))
     assert np.isfinite(matrix).all() and (matrix >= 0).all()
     assert np.array_equal(matrix, matrix.T) and not np.diag(matrix).any()
+    outcomes.append("solved")
+
+
+def test_random_meshes_through_the_whole_pipeline():
+    """At least a third of the examples reach the success branch, where every mesh of
+    the example is valid (measured: 15 of 25 under the "ci" profile, 11 to 22 in random
+    runs)."""
+    outcomes = []
+    _check_random_meshes_through_the_pipeline(outcomes)
+    assert outcomes.count("solved") >= len(outcomes) / 3, outcomes
 
 
 def test_a_fitted_pipeline_predicts_identically_in_another_process(tmp_path):
