@@ -108,6 +108,7 @@ class ShapeDNA(SampleTransformer):
         Parameters
         ----------
         X : sequence of ScalarField
+            Each with a ``spectrum`` of at least ``n_eigenpairs`` eigenvalues.
 
         Returns
         -------
