@@ -48,7 +48,7 @@ def test_a_generator_through_persistence_and_a_combination():
     diagrams = LowerStarPersistence().fit_transform(iter(fields))
     assert len(diagrams) == len(MESHES)
     combined = CombinedDistance(
-        [("dna", ShapeDNA(n_eigenvalues=5)), ("again", ShapeDNA(n_eigenvalues=5))]
+        [("dna", ShapeDNA(n_eigenpairs=6)), ("again", ShapeDNA(n_eigenpairs=6))]
     )
     # ShapeDNA gives features, not distances: what matters here is that both parts see X.
     assert combined.fit_transform(f for f in fields).shape == (3, 5)
