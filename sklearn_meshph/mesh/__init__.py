@@ -11,13 +11,14 @@
 - :mod:`.graph`: compiled union-find, connected components and the edge adjacency.
 """
 
-from ._geometry import smallest_angle_sines, unit_box
+from ._geometry import DEGENERATE_SINE, smallest_angle_sines, unit_box
 from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
 from .welding import weld_vertices
 
 __all__ = [
+    "DEGENERATE_SINE",
     "CleanMesh",
     "CleaningReport",
     "MeshCleaningWarning",

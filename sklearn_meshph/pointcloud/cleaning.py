@@ -9,19 +9,67 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..mesh import DEGENERATE_SINE
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, weld_vertices
-from .graph import canonical_order
+from .graph import canonical_order, neighbourhood_components
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
 
 __all__ = ["clean_cloud"]
 
 
+def _refuse_degenerate(points: np.ndarray, place: str) -> None:
+    """A ``ValueError`` naming the sample when the distinct points lie on one line."""
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    if spread[1] <= DEGENERATE_SINE * spread[0]:
+        raise ValueError(
+            f"{place}: the point cloud is degenerate: its {len(points)} distinct points "
+            "lie on one line, which bounds no surface"
+        )
+
+
+def _largest(labels: np.ndarray, area: np.ndarray) -> tuple[np.ndarray, int, float]:
+    """The mask of the component of largest ``area`` (ties: the lowest label), the number
+    of other components and their share of the area."""
+    largest = int(np.argmax(area))
+    total = float(area.sum())
+    share = 1.0 - float(area[largest]) / total if total > 0 else 0.0
+    return labels == largest, len(area) - 1, max(share, 0.0)
+
+
+def _far_components(points, laplacian, components, place):
+    """Drop the points far from the rest (:func:`.graph.neighbourhood_components`): the
+    component of largest area is kept, its operator built without the others."""
+    n_components, labels = neighbourhood_components(points)
+    build = CLOUD_LAPLACIANS[laplacian].value
+    if n_components == 1:
+        return np.ones(len(points), dtype=bool), *build(points), 0, 0.0
+    if components == "error":
+        raise ValueError(
+            f"{place}: the point cloud has {n_components} connected components (points "
+            "far from each other for the cloud's sampling); pass components='largest' to "
+            "keep the one of largest area"
+        )
+    operators, area = {}, np.zeros(n_components)
+    for label in range(n_components):
+        members = labels == label
+        if np.count_nonzero(members) >= MIN_POINTS:
+            operators[label] = build(points[members])
+            area[label] = operators[label][1].diagonal().sum()
+    if not operators:
+        raise ValueError(
+            f"{place}: the point cloud falls apart into {n_components} groups of fewer "
+            f"than {MIN_POINTS} points far from each other"
+        )
+    kept, n_other, share = _largest(labels, area)
+    return kept, *operators[int(labels[np.argmax(kept)])], n_other, share
+
+
 def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | None, weld: bool):
-    """Merge coincident points, build the operator, keep one connected component.
+    """Merge coincident points, drop far ones, build the operator, keep one component.
 
     The policy, in order (the analogue of :func:`sklearn_meshph.clean_mesh`):
 
@@ -29,16 +77,21 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
        gives bit for bit the same operator and eigenpairs, permuted;
     1. coincident points are merged into the first of them in that order: exactly
        equal ones always, and with ``weld=True`` those whose coordinates all differ by
-       at most ``1e-10`` times the bounding-box diagonal, as meshes are welded (the
-       local triangulations need distinct points). They are not losses: the kept-index
-       map sends each to the point it was merged into;
-    2. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
-       the distinct points in the unit box;
-    3. points in no local triangle (zero mass: all their neighbours on a line) are
+       at most :data:`sklearn_meshph.mesh.welding.WELD_RTOL` times the bounding-box
+       diagonal, as meshes are welded (the local triangulations need distinct points).
+       They are not losses: the kept-index map sends each to the point it was merged
+       into. Fewer than ``MIN_POINTS`` distinct points, or distinct points all on one
+       line, are refused (a ``ValueError`` naming the sample);
+    2. points far from the rest for the cloud's own sampling (a stray point, a small
+       far cluster: :func:`.graph.neighbourhood_components`) are other components, as
+       a mesh's: ``components="largest"`` keeps the one of largest area (the mass of
+       its own operator; ties: the lowest), ``"error"`` raises;
+    3. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
+       the kept points in the unit box;
+    4. points in no local triangle (zero mass: all their neighbours on a line) are
        dropped as unreferenced;
-    4. connected components of the operator (clusters farther apart than their
-       neighbourhoods): ``components="largest"`` keeps the one of largest mass (area;
-       ties: the lowest), ``"error"`` raises.
+    5. connected components of the operator (clusters that no local triangle joins)
+       follow ``components`` as in step 2.
 
     Returns ``(clean, L, M, solve_points, to_output)``: ``clean`` a
     :class:`CleanMesh` without faces whose vertices are the kept input points in input
@@ -56,43 +109,50 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
             f"{place}: the point cloud has {len(distinct)} distinct points; at least "
             f"{MIN_POINTS} are needed"
         )
-    solve_points = canonical[distinct]
-    L, M = CLOUD_LAPLACIANS[laplacian].value(solve_points)
+    _refuse_degenerate(canonical[distinct], place)
+    near, L, M, n_far, far_share = _far_components(
+        canonical[distinct], laplacian, components, place
+    )
+    solve_points = canonical[distinct[near]]
     mass = M.diagonal()
     referenced = mass > 0
+    if np.count_nonzero(referenced) < MIN_POINTS:
+        raise ValueError(
+            f"{place}: the point cloud is degenerate: fewer than {MIN_POINTS} of its "
+            "points are in a local triangle (their neighbourhoods lie on lines)"
+        )
     structure = L.tocoo()
     pairs = np.column_stack([structure.row, structure.col]).astype(np.int64)
-    _, labels = connected_components(len(distinct), pairs)
+    _, labels = connected_components(len(solve_points), pairs)
     real = np.unique(labels[referenced])
     kept = referenced.copy()
-    n_other = 0
-    area_share = 0.0
+    n_other, area_share = 0, 0.0
     if len(real) > 1:
         if components == "error":
             raise ValueError(
                 f"{place}: the point cloud's operator has {len(real)} connected components "
-                "(clusters of points farther apart than their neighbourhoods); pass "
+                "(clusters of points that no local triangle joins); pass "
                 "components='largest' to keep the one of largest area"
             )
-        area = np.bincount(labels, weights=mass)
-        largest = int(np.argmax(area))
-        kept &= labels == largest
-        n_other = len(real) - 1
-        area_share = max(1.0 - float(area[largest]) / float(area.sum()), 0.0)
+        in_largest, n_other, area_share = _largest(labels, np.bincount(labels, weights=mass))
+        kept &= in_largest
+    # The shares of both steps, over the area of the points the far ones were cut from.
+    area_share = far_share + (1.0 - far_share) * area_share
     n_kept = int(np.count_nonzero(kept))
     if not kept.all():
         L = L[kept][:, kept].tocsr()
         M = sp.diags(mass[kept])
         solve_points = solve_points[kept]
+    kept_distinct = np.flatnonzero(near)[kept]  # positions among the distinct points
 
     # Back to input order: each kept point is named by its input index.
-    inputs = order[distinct[kept]]
+    inputs = order[distinct[kept_distinct]]
     to_output = np.argsort(inputs, kind="stable")
     vertex_indices = inputs[to_output]
     output_of_solve = np.empty(n_kept, dtype=np.int64)
     output_of_solve[to_output] = np.arange(n_kept)
     output_of_distinct = np.full(len(distinct), -1, dtype=np.int64)
-    output_of_distinct[np.flatnonzero(kept)] = output_of_solve
+    output_of_distinct[kept_distinct] = output_of_solve
     input_to_kept = np.empty(n_input, dtype=np.int64)
     input_to_kept[order] = output_of_distinct[np.searchsorted(distinct, representative)]
 
@@ -103,7 +163,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
         n_degenerate_faces=0,
         n_repeated_faces=0,
         n_unreferenced_vertices=n_unreferenced,
-        n_other_components=n_other,
+        n_other_components=n_far + n_other,
         n_component_vertices=len(distinct) - n_unreferenced - n_kept,
         n_component_faces=0,
         vertex_share=(len(distinct) - n_kept) / len(distinct),

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
-from ..mesh._geometry import DEGENERATE_SINE
+from ..mesh import DEGENERATE_SINE
 from ..mesh.validation import check_vertices
 from ._triangulation import local_delaunay_fans
 from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph, nearest
