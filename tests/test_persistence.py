@@ -96,7 +96,16 @@ def test_float64_values_are_not_rounded():
     vertices, faces = sphere(1)
     values = 1.0 + np.arange(len(vertices)) * 1e-12  # distinct in float64, equal in float32
     values[5] = 0.5
-    diagram = lower_star_persistence((vertices, faces), values[::-1].copy())
+    values = values[::-1].copy()
+    diagram = lower_star_persistence((vertices, faces), values)
+    # One pair per local minimum (the values are distinct in float64): rounded to
+    # float32 they are all equal but one, and every pair but the essential one vanishes.
+    edges = trimesh.Trimesh(vertices, faces, process=False).edges_unique
+    lower = np.ones(len(vertices), dtype=bool)
+    for a, b in edges:
+        lower[a if values[a] > values[b] else b] = False
+    assert np.count_nonzero(lower) > 1
+    assert len(diagram) == np.count_nonzero(lower)
     assert len(np.unique(diagram[:, 0])) == len(diagram)
 
 
