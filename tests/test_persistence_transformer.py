@@ -166,5 +166,31 @@ def test_parts_keep_the_named_diagrams_of_each_function():
     assert est.diagram_names(2) == [f"f{k}: {p}" for k in (1, 2) for p in parts]
     single = LowerStarPersistence(filtration="extended", parts=("(min, max)",))
     np.testing.assert_array_equal(single.fit_transform([(sphere, values[:, 0])])[0], full[2])
-    with pytest.raises(ValueError, match=r"parts must be .*'symmetric'.*got \('ordinary H0',\)"):
+    with pytest.raises(
+        ValueError, match=r"'symmetric': parts must be .*'h0'.*got \('ordinary H0',\)"
+    ):
         LowerStarPersistence(parts=("ordinary H0",)).fit_transform(sample)
+
+
+@pytest.mark.parametrize(
+    "filtration, ids",
+    [
+        ("extended", ("ord0", "ord1", "ext0", "ext1")),
+        ("symmetric", ("h0", "ext0")),
+        ("sublevel", ("h0",)),
+        ("superlevel", ("h0",)),
+    ],
+)
+def test_parts_take_short_ids_or_names(filtration, ids):
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4)
+    sample = [(torus, torus.vertices[:, 0] + 0.1 * torus.vertices[:, 1])]
+    names = LowerStarPersistence(filtration=filtration).diagram_names()
+    full = LowerStarPersistence(filtration=filtration).fit_transform(sample)[0]
+    full = full if isinstance(full, tuple) else (full,)
+    for k, (short, name) in enumerate(zip(ids, names, strict=True)):
+        by_id = LowerStarPersistence(filtration=filtration, parts=(short,))
+        np.testing.assert_array_equal(by_id.fit_transform(sample)[0], full[k])
+        assert by_id.diagram_names() == [name]
+    # Ids and names mix; the diagrams keep the filtration's order, each once.
+    mixed = LowerStarPersistence(filtration=filtration, parts=(ids[-1], names[-1], ids[0]))
+    assert mixed.diagram_names() == sorted({names[0], names[-1]}, key=names.index)

@@ -3,7 +3,8 @@
 Each entry computes the diagrams of one function from the mesh's edge adjacency (built
 once per mesh) and names them. A new filtration is a function
 ``(adjacency, values, essential, surface, wanted) -> list of (n, 2) arrays``, the names
-of its diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`. ``wanted``
+and short ids of its diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`.
+``wanted``
 holds the indices of the diagrams the caller keeps: a filtration may skip the work of
 the others and return them empty.
 """
@@ -27,7 +28,8 @@ ESSENTIAL_POLICIES = ("keep", "drop", "max")
 
 @dataclass(frozen=True)
 class Filtration:
-    """How one function becomes diagrams: ``compute`` and the name of each diagram.
+    """How one function becomes diagrams: ``compute``, and the name and short id of
+    each diagram (``LowerStarPersistence(parts=...)`` takes either).
 
     ``surface_diagrams``: the indices of the diagrams that ``compute`` makes from the
     closed-surface edge structure (built once per mesh when one of them is wanted, None
@@ -36,7 +38,20 @@ class Filtration:
 
     compute: Callable
     diagram_names: tuple[str, ...]
+    diagram_ids: tuple[str, ...]
     surface_diagrams: tuple[int, ...] = ()
+
+    def positions(self, parts) -> list[int]:
+        """Positions, in output order, of the diagrams named by ``parts`` (ids or names);
+        a ``ValueError`` listing both for anything else."""
+        unknown = [p for p in parts if p not in self.diagram_ids + self.diagram_names]
+        if unknown or not parts:
+            raise ValueError(
+                f"parts must be a non-empty tuple of ids {self.diagram_ids} or names "
+                f"{self.diagram_names} of this filtration's diagrams; got {tuple(parts)!r}"
+            )
+        pairs = zip(self.diagram_names, self.diagram_ids, strict=True)
+        return [k for k, (name, short) in enumerate(pairs) if name in parts or short in parts]
 
 
 def _reflect(diagram: np.ndarray) -> np.ndarray:
@@ -101,20 +116,21 @@ FILTRATIONS = Registry(
     [
         Option(
             "symmetric",
-            Filtration(_symmetric, ("H0(f) + H0(-f)", "(min, max) + reflected")),
-            "two diagrams: `H0(f) + H0(-f)` merged, and each component's `(min, max)` "
-            "with its reflection; `f` and `-f` give identical output (the default)",
+            Filtration(_symmetric, ("H0(f) + H0(-f)", "(min, max) + reflected"), ("h0", "ext0")),
+            "two diagrams: `h0`, `H0(f) + H0(-f)` merged, and `ext0`, each component's "
+            "`(min, max)` with its reflection; `f` and `-f` give identical output (the "
+            "default)",
         ),
         Option(
             "sublevel",
-            Filtration(_sublevel, ("sublevel H0",)),
-            "sublevel H0 of `f`, essential classes by `essential`; depends on the sign "
+            Filtration(_sublevel, ("sublevel H0",), ("h0",)),
+            "`h0`, the sublevel H0 of `f`, essential classes by `essential`; depends on the sign "
             "(the paper's setting)",
         ),
         Option(
             "superlevel",
-            Filtration(_superlevel, ("superlevel H0",)),
-            "sublevel H0 of `-f` (superlevel sets of `f`), essential classes by "
+            Filtration(_superlevel, ("superlevel H0",), ("h0",)),
+            "`h0`, the sublevel H0 of `-f` (superlevel sets of `f`), essential classes by "
             "`essential`; depends on the sign",
         ),
         Option(
@@ -122,11 +138,13 @@ FILTRATIONS = Registry(
             Filtration(
                 _extended,
                 ("ordinary H0", "superlevel H0 (saddle, max)", "(min, max)", "essential H1"),
+                ("ord0", "ord1", "ext0", "ext1"),
                 surface_diagrams=(3,),
             ),
-            "four diagrams of extended persistence: `Ord0` (min, saddle), superlevel "
-            "`(saddle, max)` pairs, `Ext0` `(min, max)` and, on a closed surface, the "
-            "essential H1 `Ext1+`; `-f` swaps the first two and reflects all",
+            "four diagrams of extended persistence: `ord0` (min, saddle) pairs, `ord1` "
+            "superlevel (saddle, max) pairs, `ext0` each component's (min, max) and, on a "
+            "closed surface, `ext1` the essential H1 (`Ext1+`); `-f` swaps the first two "
+            "and reflects all",
         ),
     ],
 )

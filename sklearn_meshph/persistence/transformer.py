@@ -116,12 +116,15 @@ class LowerStarPersistence(SampleTransformer):
         Pairs with ``death - birth <= min_persistence`` are dropped (zero-persistence
         pairs always are).
     parts : tuple of str, default=None
-        Keep only these diagrams of each function, by the names of
-        :meth:`diagram_names` for one function (``None``: all). For example
-        ``filtration="extended", parts=("superlevel H0 (saddle, max)", "essential H1")``
+        Keep only these diagrams of each function (``None``: all), by short id or by
+        the name :meth:`diagram_names` gives for one function: ``"ord0"``, ``"ord1"``,
+        ``"ext0"`` and ``"ext1"`` for ``"extended"`` (ordinary H0, superlevel
+        ``(saddle, max)`` pairs, components' ``(min, max)``, essential H1), ``"h0"`` and
+        ``"ext0"`` for ``"symmetric"``, ``"h0"`` for ``"sublevel"`` and
+        ``"superlevel"``. For example ``filtration="extended", parts=("ord1", "ext1")``
         drops the ordinary H0 pairs and the components' ranges; several
         ``LowerStarPersistence`` with different parts, in a :class:`CombinedDistance`,
-        weigh each kind of diagram on its own.
+        weigh each kind of diagram on its own. Diagrams keep the filtration's order.
     n_jobs : int, default=None
         Samples processed in parallel. ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors.
@@ -206,16 +209,13 @@ class LowerStarPersistence(SampleTransformer):
 
     def _keep(self) -> list[int]:
         """Positions, among one function's diagrams, of those ``parts`` keeps."""
-        names = FILTRATIONS[self.filtration].value.diagram_names
+        entry = FILTRATIONS[self.filtration].value
         if self.parts is None:
-            return list(range(len(names)))
-        unknown = [p for p in self.parts if p not in names]
-        if unknown or not self.parts:
-            raise ValueError(
-                f"parts must be a non-empty tuple of the diagrams of filtration="
-                f"{self.filtration!r}: {names}; got {self.parts!r}"
-            )
-        return [k for k, name in enumerate(names) if name in self.parts]
+            return list(range(len(entry.diagram_names)))
+        try:
+            return entry.positions(self.parts)
+        except ValueError as error:
+            raise ValueError(f"filtration={self.filtration!r}: {error}") from None
 
     def _check_params(self) -> None:
         super()._check_params()
