@@ -40,6 +40,7 @@ from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
 from .spectral import (
     CacheWarning,
+    ConstantEigenfunctionWarning,
     LaplacianEigenTransformer,
     MeshQualityWarning,
     RepeatedEigenvalueWarning,
@@ -83,6 +84,7 @@ __all__ = [
     "LowerStarPersistence",
     "MeshCleaningWarning",
     "MeshQualityWarning",
+    "ConstantEigenfunctionWarning",
     "RepeatedEigenvalueWarning",
     "ScalarField",
     "ShapeDNA",
