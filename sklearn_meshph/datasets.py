@@ -4,6 +4,7 @@ clouds sampled from meshes."""
 from __future__ import annotations
 
 import os
+import warnings
 from numbers import Integral, Real
 from pathlib import Path
 
@@ -12,13 +13,13 @@ import trimesh
 from joblib import delayed
 from sklearn.utils import Bunch, check_random_state
 
-from ._param_validation import Interval, validate_params
+from ._param_validation import Interval, Options, validate_params
 from ._progress import parallel, track
 from .mesh.reading import COMPRESSIONS
 from .mesh.validation import check_mesh
 from .pointcloud.reading import POINT_CLOUD_FORMATS, read_sample_file
 
-__all__ = ["load_mesh_folder", "make_shapes", "sample_point_cloud"]
+__all__ = ["SkippedFilesWarning", "load_mesh_folder", "make_shapes", "sample_point_cloud"]
 
 _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
@@ -42,16 +43,29 @@ POINT_CLOUD_EXTENSIONS = _CLOUD_EXTENSIONS + tuple(
 SAMPLE_EXTENSIONS = MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS
 
 
+class SkippedFilesWarning(UserWarning):
+    """:func:`load_mesh_folder` skipped files it could not read (``on_error="skip"``)."""
+
+
+def _read_or_error(path, place: str):
+    """The sample of ``path``, or the ``ValueError`` that says why it cannot be read."""
+    try:
+        return read_sample_file(path, place)
+    except ValueError as exc:
+        return exc
+
+
 @validate_params(
     {
         "extensions": [tuple, list],
         "load": ["boolean"],
         "n_jobs": [Integral, None],
         "verbose": [Interval(Integral, 0, None, closed="left")],
+        "on_error": [Options(("raise", "skip"))],
     }
 )
 def load_mesh_folder(
-    path, *, extensions=SAMPLE_EXTENSIONS, load=True, n_jobs=None, verbose=0
+    path, *, extensions=SAMPLE_EXTENSIONS, load=True, n_jobs=None, verbose=0, on_error="raise"
 ) -> Bunch:
     """Load a folder of meshes or point clouds with one class per sub-folder.
 
@@ -67,10 +81,10 @@ def load_mesh_folder(
 
     Compressed files (``.gz``, ``.bz2``, ``.xz``, e.g. ``ant/081.off.gz``) are
     decompressed in memory, in the format of the inner name; a file that decompresses
-    beyond ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes (2 GiB), or a
-    text point cloud beyond ``sklearn_meshph.pointcloud.reading.MAX_TEXT_SIZE`` bytes
-    (512 MiB), is refused. Only the formats of ``MESH_FORMATS`` and
-    ``POINT_CLOUD_FORMATS`` are read, whatever ``extensions`` says (no archives).
+    beyond ``sklearn_meshph.mesh.reading.MAX_DECOMPRESSED_SIZE`` bytes, or a text point
+    cloud beyond ``sklearn_meshph.pointcloud.reading.MAX_TEXT_SIZE`` bytes, is refused.
+    Only the formats of ``MESH_FORMATS`` and ``POINT_CLOUD_FORMATS`` are read, whatever
+    ``extensions`` says (no archives).
 
     Parameters
     ----------
@@ -94,19 +108,28 @@ def load_mesh_folder(
     verbose : int, default=0
         With ``verbose > 0`` and ``load=True``, a progress bar over the files on stderr
         (needs tqdm, the ``progress`` extra); nothing is printed at 0.
+    on_error : {"raise", "skip"}, default="raise"
+        What a file that cannot be read does (not a valid mesh or point cloud, too
+        large...): ``"raise"`` stops with its error; ``"skip"`` leaves it out, lists
+        it in ``skipped`` and says so in one :class:`SkippedFilesWarning`. A class
+        whose files are all skipped is not a class. With ``load=False`` no file is
+        read, so none is skipped.
 
     Returns
     -------
     data : Bunch
         ``data`` (meshes, point clouds or paths), ``target`` (int labels),
-        ``target_names``, ``filenames`` and ``DESCR``.
+        ``target_names``, ``filenames``, ``skipped`` (the files left out, each with the
+        reason, as ``(file, message)`` pairs; empty unless ``on_error="skip"``) and
+        ``DESCR``.
 
     Raises
     ------
     ValueError
         If ``path`` is not a folder, holds no mesh or point-cloud file in its
-        sub-folders, or a file cannot be read (the message names the sample and the
-        file).
+        sub-folders, or (with ``on_error="raise"``) a file cannot be read (the message
+        names the sample and the file); with ``on_error="skip"``, if no file can be
+        read.
 
     Examples
     --------
@@ -140,8 +163,10 @@ def load_mesh_folder(
         raise ValueError(
             f"no mesh files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
         )
+    skipped = []
     if load:
-        jobs = (delayed(read_sample_file)(f, f"sample {k}") for k, f in enumerate(filenames))
+        reader = read_sample_file if on_error == "raise" else _read_or_error
+        jobs = (delayed(reader)(f, f"sample {k}") for k, f in enumerate(filenames))
         data = list(
             track(
                 parallel(n_jobs)(jobs),
@@ -150,14 +175,57 @@ def load_mesh_folder(
                 verbose=verbose,
             )
         )
+        skipped = [(str(f), _reason(x)) for f, x in zip(filenames, data, strict=True) if _bad(x)]
+        if len(skipped) == len(data):
+            raise ValueError(
+                f"none of the {len(data)} files of {os.fspath(path)!r} can be read; the "
+                f"first: {skipped[0][1]}"
+            )
+        if skipped:
+            data, filenames, target, names = _without_skipped(data, filenames, target, names)
+            _warn_skipped(skipped, os.fspath(path))
     else:
         data = [str(f) for f in filenames]
     return Bunch(
         data=data,
-        target=np.asarray(target),
+        target=np.asarray(target, dtype=int),
         target_names=np.asarray(names),
         filenames=np.asarray([str(f) for f in filenames]),
+        skipped=skipped,
         DESCR=f"Samples from {os.fspath(path)}: {len(filenames)} files, {len(names)} classes.",
+    )
+
+
+def _bad(sample) -> bool:
+    return isinstance(sample, ValueError)
+
+
+def _reason(error: ValueError) -> str:
+    """The error's one line without the ``sample K:`` prefix (the file is named)."""
+    text = " ".join(str(error).split())
+    head, _, rest = text.partition(": ")
+    return rest if head.startswith("sample ") and rest else text
+
+
+def _without_skipped(data, filenames, target, names):
+    """The samples read, their files and labels, and the classes that kept a file."""
+    kept = [k for k, x in enumerate(data) if not _bad(x)]
+    classes = sorted({target[k] for k in kept})
+    relabel = {c: new for new, c in enumerate(classes)}
+    return (
+        [data[k] for k in kept],
+        [filenames[k] for k in kept],
+        [relabel[target[k]] for k in kept],
+        [names[c] for c in classes],
+    )
+
+
+def _warn_skipped(skipped, path: str) -> None:
+    lines = "; ".join(reason for _, reason in skipped)
+    warnings.warn(
+        f"{len(skipped)} file(s) of {path!r} cannot be read and are skipped: {lines}",
+        SkippedFilesWarning,
+        stacklevel=3,
     )
 
 

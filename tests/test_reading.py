@@ -3,8 +3,10 @@
 import bz2
 import gzip
 import lzma
+import struct
 import time
 import tracemalloc
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +14,7 @@ import pytest
 import trimesh
 
 from sklearn_meshph import check_mesh, load_mesh_folder
-from sklearn_meshph.datasets import MESH_EXTENSIONS
+from sklearn_meshph.datasets import MESH_EXTENSIONS, SkippedFilesWarning
 from sklearn_meshph.mesh import reading
 from sklearn_meshph.mesh.reading import read_mesh_file, split_compression
 
@@ -166,7 +168,7 @@ def test_a_compression_bomb_is_refused(tmp_path, monkeypatch):
 
 def test_default_limit_is_documented():
     assert reading.MAX_DECOMPRESSED_SIZE == 2 * 1024**3
-    assert "2 GiB" in read_mesh_file.__doc__
+    assert "MAX_DECOMPRESSED_SIZE" in read_mesh_file.__doc__
 
 
 def test_a_file_exactly_at_the_limit_is_read(tmp_path, sphere):
@@ -257,11 +259,119 @@ def test_parallel_loading_keeps_order(tmp_path, capsys):
 
 
 @pytest.mark.parametrize(
-    "params", [{"n_jobs": "two"}, {"verbose": -1}, {"n_jobs": 1.5}, {"extensions": ".off"}]
+    "params",
+    [
+        {"n_jobs": "two"},
+        {"verbose": -1},
+        {"n_jobs": 1.5},
+        {"extensions": ".off"},
+        {"load": "yes"},
+        {"on_error": "ignore"},
+    ],
 )
-def test_load_mesh_folder_parameters_are_checked(tmp_path, params):
-    with pytest.raises((ValueError, TypeError)):
+def test_load_mesh_folder_parameters_are_checked(tmp_path, sphere, params):
+    # A readable mesh in the folder: only the parameter can be what is refused.
+    (tmp_path / "balls").mkdir()
+    write(tmp_path / "balls" / "a.off", sphere)
+    assert len(load_mesh_folder(tmp_path).data) == 1
+    (name,) = params
+    with pytest.raises((ValueError, TypeError), match=rf"'{name}' parameter of load_mesh_folder"):
         load_mesh_folder(tmp_path, **params)
+
+
+def _png() -> bytes:
+    """A valid one-pixel PNG image."""
+
+    def chunk(kind, data):
+        return (
+            struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+        )
+
+    header = struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(b"\x00\xff\x00\x00"))
+        + chunk(b"IEND", b"")
+    )
+
+
+NOT_MESHES = {
+    "notes.off.gz": gzip.compress(b"hello"),
+    "plain_text.off.gz": b"hello",
+    "picture.obj": _png(),
+    "picture.off": _png(),
+    "picture.ply": _png(),
+    "picture.stl": _png(),
+    "picture.glb": _png(),
+    "text.obj": b"hello world\n",
+    "text.ply": b"hello\n",
+    "empty.off": b"",
+}
+
+
+@pytest.mark.parametrize("name", sorted(NOT_MESHES))
+def test_a_file_that_is_not_a_mesh_is_one_clear_line(tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(NOT_MESHES[name])
+    with pytest.raises(ValueError, match=r"^sample 3: ") as info:
+        read_mesh_file(path, "sample 3")
+    message = str(info.value)
+    assert "\n" not in message and name in message and "not a valid" in message
+    # Not the parser's own words (trimesh's, gzip's, Python's).
+    for leaked in ("unpack", "Not a", "header", "gzipped", "expected", "Errno"):
+        assert leaked not in message
+
+
+def _folder_with_bad_files(root, sphere):
+    for name in ("balls", "boxes", "bad"):
+        (root / name).mkdir(parents=True)
+    write(root / "balls" / "a.off", sphere)
+    write(root / "balls" / "c.off", sphere)
+    write(root / "boxes" / "b.ply", trimesh.creation.box())
+    (root / "balls" / "b.off.gz").write_bytes(gzip.compress(b"hello"))
+    (root / "boxes" / "a.obj").write_bytes(_png())
+    (root / "bad" / "only.stl").write_bytes(b"")
+    return root
+
+
+def test_unreadable_files_are_skipped_on_request(tmp_path, sphere):
+    root = _folder_with_bad_files(tmp_path / "data", sphere)
+    with pytest.raises(ValueError, match=r"^sample 0: .*only\.stl.* not a valid"):
+        load_mesh_folder(root)
+    with pytest.warns(SkippedFilesWarning, match=r"3 file\(s\) .* skipped: .*b\.off\.gz") as caught:
+        data = load_mesh_folder(root, on_error="skip")
+    assert len(caught) == 1 and "a.obj" in str(caught[0].message)
+    assert [Path(f).name for f in data.filenames] == ["a.off", "c.off", "b.ply"]
+    # The class whose only file is unreadable is no class; labels stay consecutive.
+    assert data.target_names.tolist() == ["balls", "boxes"]
+    assert data.target.tolist() == [0, 0, 1]
+    assert [Path(f).name for f, _ in data.skipped] == ["only.stl", "b.off.gz", "a.obj"]
+    assert all("not a valid" in reason for _, reason in data.skipped)
+    assert all(not reason.startswith("sample") for _, reason in data.skipped)
+    with pytest.warns(SkippedFilesWarning):
+        parallel = load_mesh_folder(root, on_error="skip", n_jobs=2)
+    assert parallel.filenames.tolist() == data.filenames.tolist()
+    assert load_mesh_folder(root, on_error="skip", load=False).skipped == []
+
+
+def test_skipping_every_file_is_an_error(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "x.off").write_text("hello")
+    with pytest.raises(ValueError, match=r"none of the 1 files .* be read; the first: .*x\.off"):
+        load_mesh_folder(tmp_path, on_error="skip")
+
+
+def test_reading_modules_share_public_decompression():
+    import ast
+    import inspect
+
+    from sklearn_meshph.pointcloud import reading as cloud_reading
+
+    tree = ast.parse(inspect.getsource(cloud_reading))
+    imported = [a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names]
+    assert imported and not [name for name in imported if name.startswith("_")]
+    assert {"LimitedReader", "decompress"} <= set(reading.__all__)
 
 
 def test_load_watertight_folder(watertight_dir):
@@ -301,3 +411,38 @@ def test_archives_and_containers_are_refused_before_trimesh_opens_them(tmp_path,
     with pytest.raises(ValueError, match=r"disguised\.off\.gz.* is a zip archive"):
         check_mesh(compressed)
     assert reading.MESH_FORMATS == ("obj", "ply", "off", "stl", "glb")
+
+
+@pytest.mark.parametrize("compression", [None, ".gz"])
+def test_text_point_cloud_peak_memory_within_twice_the_file(tmp_path, compression):
+    from sklearn_meshph.pointcloud.reading import read_point_cloud_file
+
+    points = np.random.default_rng(0).normal(size=(100_000, 3))
+    text = "# a scan\n" + "\n".join(f"{x:.6f} {y:.6f} {z:.6f}" for x, y, z in points) + "\n"
+    path = tmp_path / "scan.xyz"
+    path.write_text(text)
+    size = path.stat().st_size
+    if compression:
+        path = compress(path, compression)
+    tracemalloc.start()
+    try:
+        loaded = read_point_cloud_file(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    np.testing.assert_allclose(loaded, points, atol=1e-6)
+    assert peak <= 2 * size, (peak, size)
+
+
+def test_text_point_cloud_errors_name_the_line(tmp_path):
+    from sklearn_meshph.pointcloud.reading import read_point_cloud_file
+
+    path = tmp_path / "scan.xyz"
+    path.write_text("3\n0 0 0\n# comment\n1 1 1\n2 2\n")
+    with pytest.raises(ValueError, match=r"scan\.xyz'?: line 5 holds 2 numbers where the first"):
+        read_point_cloud_file(path)
+    path.write_text("0 0 0\n1 x 1\n")
+    with pytest.raises(ValueError, match=r"scan\.xyz'?: line 2 holds something other than"):
+        read_point_cloud_file(path)
+    path.write_text("7\n1 2 3 4\n5 6 7 8\n")
+    np.testing.assert_array_equal(read_point_cloud_file(path), [[1, 2, 3], [5, 6, 7]])

@@ -6,7 +6,13 @@ could expand without bound, so any other format is refused before trimesh sees i
 so is a file whose content is a zip archive whatever its name. Compressed files
 (``.gz``, ``.bz2``, ``.xz``, e.g. ``bunny.off.gz``) are decompressed in memory with the
 standard library, never to more than ``MAX_DECOMPRESSED_SIZE`` bytes, and handed to
-trimesh with the format of the inner name (``.off``).
+trimesh with the format of the inner name (``.off``). :class:`LimitedReader` (a stream)
+and :func:`decompress` (the whole content) are that bounded decompression, shared with
+the point-cloud reader.
+
+A file that is not a mesh of its format (text, an image, an empty file) is refused with
+one line naming it and saying it is not a valid mesh; the parser's own message is kept
+as the exception's cause only.
 """
 
 from __future__ import annotations
@@ -22,6 +28,8 @@ __all__ = [
     "COMPRESSIONS",
     "MAX_DECOMPRESSED_SIZE",
     "MESH_FORMATS",
+    "LimitedReader",
+    "decompress",
     "read_mesh_file",
     "split_compression",
 ]
@@ -58,26 +66,71 @@ def split_compression(path) -> tuple[str, str | None]:
     return os.path.splitext(name)[1].lstrip("."), compression
 
 
-def _decompress(path: str, compression: str, place: str, limit: int) -> io.BytesIO:
-    """The decompressed content of ``path``, read in chunks and refused beyond ``limit``."""
+class LimitedReader:
+    """A binary stream of a compressed file's content, decompressed as it is read, that
+    refuses to yield more than ``limit`` bytes in all.
+
+    ``read``, ``readline`` and iteration over lines raise ``ValueError`` (naming
+    ``place`` and the file) when the content goes beyond ``limit``, or when the file is
+    not valid data of its compression format; a context manager that closes the file.
+    """
+
+    def __init__(self, path, compression: str, place: str, limit: int, what: str = "mesh file"):
+        self.path, self.compression, self.place, self.what = (
+            os.fspath(path),
+            compression,
+            place,
+            what,
+        )
+        self.limit, self.count = int(limit), 0
+        self._stream = COMPRESSIONS[compression](self.path, "rb")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+    def close(self) -> None:
+        self._stream.close()
+
+    def _take(self, method, size: int) -> bytes:
+        # One byte past the limit tells "exactly at the limit" from "beyond it".
+        room = self.limit + 1 - self.count
+        size = room if size is None or size < 0 else min(size, room)
+        try:
+            data = method(size)
+        except (OSError, EOFError, lzma.LZMAError, zlib.error) as exc:  # bad or truncated
+            raise ValueError(
+                f"{self.place}: cannot decompress {self.what} {self.path!r}: it is not valid "
+                f"{self.compression} data, so not a valid {self.what.split()[0]}"
+            ) from exc
+        self.count += len(data)
+        if self.count > self.limit:
+            raise ValueError(
+                f"{self.place}: {self.what} {self.path!r} decompresses to more than "
+                f"{self.limit} bytes (the limit); refusing to read it"
+            )
+        return data
+
+    def read(self, size: int = -1) -> bytes:
+        return self._take(self._stream.read, size)
+
+    def readline(self, size: int = -1) -> bytes:
+        return self._take(self._stream.readline, size)
+
+    def __iter__(self):
+        while line := self.readline():
+            yield line
+
+
+def decompress(path, compression: str, place: str, limit: int, what: str = "mesh file"):
+    """The whole decompressed content of ``path`` in an ``io.BytesIO``, read in chunks
+    and refused beyond ``limit`` bytes (see :class:`LimitedReader`)."""
     buffer = io.BytesIO()
-    try:
-        with COMPRESSIONS[compression](path, "rb") as stream:
-            while True:
-                # One byte past the limit tells "exactly at the limit" from "beyond it".
-                chunk = stream.read(min(_CHUNK, limit + 1 - buffer.tell()))
-                if not chunk:
-                    break
-                buffer.write(chunk)
-                if buffer.tell() > limit:
-                    raise ValueError(
-                        f"{place}: mesh file {path!r} decompresses to more than {limit} "
-                        f"bytes (the limit, MAX_DECOMPRESSED_SIZE); refusing to read it"
-                    )
-    except ValueError:
-        raise
-    except (OSError, EOFError, lzma.LZMAError, zlib.error) as exc:  # bad or truncated archive
-        raise ValueError(f"{place}: cannot decompress mesh file {path!r}: {exc}") from exc
+    with LimitedReader(path, compression, place, limit, what) as stream:
+        while chunk := stream.read(_CHUNK):
+            buffer.write(chunk)
     buffer.seek(0)
     return buffer
 
@@ -101,7 +154,7 @@ def read_mesh_file(
         Names the sample in error messages, which also name the file.
     max_decompressed_size : int, optional
         Largest decompressed size of a compressed file, in bytes; default
-        ``MAX_DECOMPRESSED_SIZE`` (2 GiB). Decompression stops there.
+        ``MAX_DECOMPRESSED_SIZE``. Decompression stops there.
     allow_points : bool, default=False
         Return a file of vertices without triangles (a point cloud, such as a PLY
         without faces) as a ``trimesh.PointCloud`` instead of refusing it.
@@ -115,9 +168,9 @@ def read_mesh_file(
     ------
     ValueError
         If the path does not exist or is not a file, is not one of ``MESH_FORMATS`` or
-        holds a zip archive, the file is empty, cannot be
-        decompressed or decompresses beyond the limit, is not a mesh format trimesh
-        reads, cannot be parsed, or holds no triangle. The message names the file.
+        holds a zip archive, or decompresses beyond the limit; or if the file is not a
+        valid mesh: empty, not valid compressed data, not parsable in its format, or
+        without a triangle. The message is one line naming the file.
     """
     import trimesh
 
@@ -127,7 +180,7 @@ def read_mesh_file(
     if not os.path.isfile(path):
         raise ValueError(f"{place}: mesh file {path!r} does not exist")
     if os.path.getsize(path) == 0:
-        raise ValueError(f"{place}: mesh file {path!r} is empty")
+        raise ValueError(f"{place}: mesh file {path!r} is empty, not a valid mesh")
     file_type, compression = split_compression(path)
     if not file_type:
         raise ValueError(
@@ -145,16 +198,19 @@ def read_mesh_file(
         source = path
     else:
         limit = MAX_DECOMPRESSED_SIZE if max_decompressed_size is None else max_decompressed_size
-        source = _decompress(path, compression, place, int(limit))
+        source = decompress(path, compression, place, int(limit))
         if source.getbuffer().nbytes == 0:
-            raise ValueError(f"{place}: mesh file {path!r} is empty once decompressed")
+            raise ValueError(
+                f"{place}: mesh file {path!r} is empty once decompressed, not a valid mesh"
+            )
         head = bytes(source.getbuffer()[:4])
     if head in _ZIP_MAGIC:
         raise ValueError(f"{place}: mesh file {path!r} is a zip archive; archives are refused")
+    invalid = f"{place}: mesh file {path!r} is not a valid .{file_type} mesh"
     try:
         loaded = trimesh.load(source, file_type=file_type, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on malformed files
-        raise ValueError(f"{place}: cannot read mesh file {path!r}: {exc}") from exc
+        raise ValueError(f"{invalid} (it cannot be parsed)") from exc
     if allow_points and isinstance(loaded, trimesh.Trimesh) and len(loaded.faces) == 0:
         # Forced into a mesh, a file of vertices only loses them: read it as points.
         if hasattr(source, "seek"):
@@ -162,9 +218,9 @@ def read_mesh_file(
         try:
             points = trimesh.load(source, file_type=file_type, process=False)
         except Exception as exc:  # as above
-            raise ValueError(f"{place}: cannot read mesh file {path!r}: {exc}") from exc
+            raise ValueError(f"{invalid} (it cannot be parsed)") from exc
         if isinstance(points, trimesh.PointCloud | trimesh.Trimesh) and len(points.vertices):
             return points
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ValueError(f"{place}: mesh file {path!r} contains no triangles")
+        raise ValueError(f"{invalid}: it contains no triangles")
     return loaded

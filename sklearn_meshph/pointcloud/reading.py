@@ -3,30 +3,78 @@
 ``.xyz`` and ``.pts`` files are plain text, one point per line: at least three numbers,
 the first three being the coordinates (further columns, such as normals or colours, are
 ignored); blank lines and ``#`` comments are skipped, and so is a first line holding a
-single number (the point count that ``.pts`` files start with). They are parsed with
-NumPy, never beyond ``MAX_TEXT_SIZE`` bytes (after decompression for ``.gz``, ``.bz2``
-and ``.xz``). Every other format goes through
+single number (the point count that ``.pts`` files start with). They are read as a
+stream, twice (counting the points, then parsing them block by block into an array of
+that size), so that the memory held beyond the points themselves stays small whatever
+the file's size; never beyond ``MAX_TEXT_SIZE`` bytes (after decompression for ``.gz``,
+``.bz2`` and ``.xz``, which goes through
+:class:`sklearn_meshph.mesh.reading.LimitedReader`). Every other format goes through
 :func:`sklearn_meshph.mesh.reading.read_mesh_file`, whose safety checks apply; a file
 it reads without triangles (a PLY of vertices only) is a point cloud.
 """
 
 from __future__ import annotations
 
-import io
+import contextlib
+import itertools
 import os
 
 import numpy as np
 
-from ..mesh.reading import _decompress, read_mesh_file, split_compression
+from ..mesh.reading import LimitedReader, read_mesh_file, split_compression
 
 __all__ = ["MAX_TEXT_SIZE", "POINT_CLOUD_FORMATS", "read_point_cloud_file", "read_sample_file"]
 
 #: The text point-cloud formats read (file name endings without the dot).
 POINT_CLOUD_FORMATS = ("xyz", "pts")
 
-#: Largest size of a text point-cloud file, in bytes (512 MiB, about 20 million points),
-#: decompressed: NumPy parses the whole text in memory.
+#: Largest size of a text point-cloud file, in bytes (512 MiB), decompressed.
 MAX_TEXT_SIZE = 512 * 1024**2
+
+_BLOCK = 4096  # lines parsed at a time
+
+
+@contextlib.contextmanager
+def _data_lines(path: str, compression, place: str):
+    """``(line number, text)`` of each line that holds data, comments stripped."""
+    if compression is None:
+        stream = open(path, "rb")  # noqa: SIM115 (closed below)
+    else:
+        stream = LimitedReader(path, compression, place, MAX_TEXT_SIZE, "point cloud file")
+
+    def lines():
+        for number, line in enumerate(stream, start=1):
+            text = line.split(b"#", 1)[0].strip()
+            if text:
+                yield number, text
+
+    try:
+        yield lines()
+    finally:
+        stream.close()
+
+
+def _parse_block(block, width: int, path: str, place: str) -> np.ndarray:
+    """The numbers of a block of lines, ``(len(block), width)``; a line that does not
+    hold ``width`` numbers is named."""
+    try:
+        table = np.loadtxt([text.decode("latin-1") for _, text in block], ndmin=2)
+    except ValueError:
+        table = None
+    if table is not None and table.shape[1] == width:
+        return table
+    for number, text in block:
+        fields = text.split()
+        try:
+            [float(f) for f in fields]
+        except ValueError:
+            reason = "holds something other than numbers"
+        else:
+            if len(fields) == width:
+                continue
+            reason = f"holds {len(fields)} numbers where the first point has {width}"
+        raise ValueError(f"{place}: cannot read point cloud file {path!r}: line {number} {reason}")
+    raise ValueError(f"{place}: cannot read point cloud file {path!r}")  # not reached
 
 
 def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
@@ -37,38 +85,41 @@ def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
     ValueError
         If the file does not exist, is empty, is larger than ``MAX_TEXT_SIZE`` (once
         decompressed), or a line does not hold at least three numbers (the same count
-        on every line). The message names the file.
+        on every line). The message is one line naming the file (and the line).
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ValueError(f"{place}: point cloud file {path!r} does not exist")
     _, compression = split_compression(path)
-    if compression is None:
-        if os.path.getsize(path) > MAX_TEXT_SIZE:
-            raise ValueError(
-                f"{place}: point cloud file {path!r} is larger than {MAX_TEXT_SIZE} bytes "
-                "(the limit, MAX_TEXT_SIZE); refusing to parse it"
-            )
-        with open(path, "rb") as stream:
-            data = stream.read()
-    else:
-        data = _decompress(path, compression, place, MAX_TEXT_SIZE).getvalue()
-    lines = [line.split(b"#")[0].strip() for line in data.splitlines()]
-    lines = [line for line in lines if line]
-    if lines and len(lines[0].split()) == 1:
-        lines = lines[1:]  # the point count of a .pts file
-    if not lines:
-        raise ValueError(f"{place}: point cloud file {path!r} holds no points")
-    try:
-        table = np.loadtxt(io.BytesIO(b"\n".join(lines)), dtype=np.float64, ndmin=2)
-    except ValueError as exc:
-        raise ValueError(f"{place}: cannot read point cloud file {path!r}: {exc}") from exc
-    if table.shape[1] < 3:
+    if compression is None and os.path.getsize(path) > MAX_TEXT_SIZE:
         raise ValueError(
-            f"{place}: point cloud file {path!r} has {table.shape[1]} numbers per line; "
+            f"{place}: point cloud file {path!r} is larger than {MAX_TEXT_SIZE} bytes "
+            "(the limit, MAX_TEXT_SIZE); refusing to parse it"
+        )
+    n_points, width, skip = 0, 0, 0
+    with _data_lines(path, compression, place) as lines:
+        for number, text in lines:
+            if not n_points and not skip and len(text.split()) == 1:
+                skip = number  # the point count of a .pts file
+                continue
+            if not n_points:
+                width = len(text.split())
+            n_points += 1
+    if not n_points:
+        raise ValueError(f"{place}: point cloud file {path!r} holds no points")
+    if width < 3:
+        raise ValueError(
+            f"{place}: point cloud file {path!r} has {width} numbers per line; "
             "expected at least 3 (x y z)"
         )
-    return np.ascontiguousarray(table[:, :3])
+    points = np.empty((n_points, 3), dtype=np.float64)
+    filled = 0
+    with _data_lines(path, compression, place) as lines:
+        kept = (item for item in lines if item[0] != skip)
+        while block := list(itertools.islice(kept, _BLOCK)):
+            points[filled : filled + len(block)] = _parse_block(block, width, path, place)[:, :3]
+            filled += len(block)
+    return points
 
 
 def read_sample_file(path, place: str = "mesh"):
