@@ -1,6 +1,7 @@
-"""Pieces shared by the assignment solvers: augmenting an alternating path, a binary
-heap, a total order on diagrams that fixes the orientation of a pair, the transpose of
-an edge list, and the collapse of duplicated points into multiplicities."""
+"""Pieces shared by the assignment and flow solvers: augmenting an alternating path, a
+binary heap, a total order on diagrams that fixes the orientation of a pair, edge lists
+(grown as they fill, transposed), the flow pushed along a path, and the collapse of
+duplicated points into multiplicities."""
 
 from __future__ import annotations
 
@@ -115,3 +116,49 @@ def transpose(ptr, cols, n_cols):
         t_edge[fill[cols[e]]] = e
         fill[cols[e]] += 1
     return row_of, t_ptr, t_edge
+
+
+@numba.njit(cache=True)
+def reserve(cols, costs, used, needed):
+    """An edge list ``(cols, costs)`` with room for ``needed`` edges, its first ``used``
+    kept: the arrays themselves when they have the room, else copies at least twice as
+    long (a list filled edge by edge grows in amortized constant time)."""
+    if needed <= len(cols):
+        return cols, costs
+    size = max(2 * len(cols), needed)
+    grown_cols = np.empty(size, np.int64)
+    grown_cols[:used] = cols[:used]
+    grown_costs = np.empty(size)
+    grown_costs[:used] = costs[:used]
+    return grown_cols, grown_costs
+
+
+@numba.njit(cache=True)
+def path_room(via_col, via_row, row_of, cols, flow, end, amount):
+    """What a flow can push along the path a search found back from column ``end``:
+    ``amount`` at most, and no more than each edge it runs back along carries. The path
+    reaches each column along the edge ``via_col[j]`` and each row back along the edge
+    ``via_row[r]``, -1 at the row it starts from. Returns the amount and that row."""
+    j = end
+    while True:
+        r = row_of[via_col[j]]
+        back = via_row[r]
+        if back < 0:
+            return amount, r
+        amount = min(amount, flow[back])
+        j = cols[back]
+
+
+@numba.njit(cache=True)
+def push_path(via_col, via_row, row_of, cols, flow, end, amount):
+    """Push ``amount`` along the path of :func:`path_room`: forward along the edges that
+    reach its columns, back along those that reach its rows."""
+    j = end
+    while True:
+        e = via_col[j]
+        flow[e] += amount
+        back = via_row[row_of[e]]
+        if back < 0:
+            return
+        flow[back] -= amount
+        j = cols[back]

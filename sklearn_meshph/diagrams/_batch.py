@@ -13,8 +13,9 @@ import numba
 import numpy as np
 
 from ._bottleneck import SMALL_PAIRS, bottleneck_finite, bottleneck_small
+from ._costs import power, power_of_two_above
 from ._sliced import directions, project, sliced_pairs
-from ._wasserstein import power, power_of_two_above, wasserstein_scaled
+from ._wasserstein import wasserstein_scaled
 from .validation import Packed
 
 __all__ = ["pack", "pack_one", "pack_sliced", "pair_distances", "split_diagram"]

@@ -1,8 +1,8 @@
 """Compiled exact bottleneck distance between two finite diagrams, and its matching.
 
-Two algorithms, both exact: successive minimax augmenting paths for diagrams of up to a
-few hundred points, and for larger ones a search over the candidate values with a
-Hopcroft-Karp matching test on the pairs within each threshold.
+Two algorithms, both exact: successive minimax augmenting paths for small diagrams, and
+for larger ones a search over the candidate values, each tested by a maximum matching
+(:mod:`._matching`) of the pairs within the threshold.
 """
 
 from __future__ import annotations
@@ -12,106 +12,7 @@ import numpy as np
 
 from ._assignment import DIAGONAL, augment, collapse, transpose
 from ._kdtree import STACK, build, nearest, within
-
-
-@numba.njit(cache=True)
-def _max_matching(adj_ptr, adj, n_left, n_right, start):
-    """Hopcroft-Karp maximum matching of a bipartite graph in CSR form: its size and the
-    partner of each left and right vertex (-1: unmatched).
-
-    ``start`` proposes a partner for each left vertex (-1: none); the proposals that are
-    edges and do not collide are kept as the initial matching. The threshold search
-    passes the matching of its previous test: thresholds close to each other have
-    nearly the same maximum matching, so few phases are left."""
-    # One allocation for all the work arrays: this runs millions of times on tiny graphs.
-    work = np.empty(5 * n_left + n_right + 1, np.int64)
-    match_left = work[:n_left]
-    match_right = work[n_left : n_left + n_right]
-    dist = work[n_left + n_right : 2 * n_left + n_right]
-    queue = work[2 * n_left + n_right : 3 * n_left + n_right]
-    edge_pos = work[3 * n_left + n_right : 4 * n_left + n_right]
-    stack = work[4 * n_left + n_right :]
-    match_left[:] = -1
-    match_right[:] = -1
-    size = 0
-    for u in range(n_left):
-        v = start[u]
-        if v < 0 or match_right[v] >= 0:
-            continue
-        for k in range(adj_ptr[u], adj_ptr[u + 1]):
-            if adj[k] == v:
-                match_left[u] = v
-                match_right[v] = u
-                size += 1
-                break
-    inf = n_left + n_right + 1
-    while True:
-        head = tail = 0
-        for u in range(n_left):
-            if match_left[u] < 0:
-                dist[u] = 0
-                queue[tail] = u
-                tail += 1
-            else:
-                dist[u] = inf
-        found = inf
-        while head < tail:
-            u = queue[head]
-            head += 1
-            if dist[u] >= found:
-                continue
-            for k in range(adj_ptr[u], adj_ptr[u + 1]):
-                w = match_right[adj[k]]
-                if w < 0:
-                    if found == inf:
-                        found = dist[u] + 1
-                elif dist[w] == inf:
-                    dist[w] = dist[u] + 1
-                    queue[tail] = w
-                    tail += 1
-        if found == inf:
-            return size, match_left, match_right
-        for u in range(n_left):
-            edge_pos[u] = adj_ptr[u]
-        for root in range(n_left):
-            if match_left[root] >= 0:
-                continue
-            # Iterative DFS along layered edges.
-            top = 0
-            stack[0] = root
-            while top >= 0:
-                u = stack[top]
-                advanced = False
-                while edge_pos[u] < adj_ptr[u + 1]:
-                    v = adj[edge_pos[u]]
-                    w = match_right[v]
-                    if w < 0:
-                        if dist[u] + 1 == found:
-                            # Augment along the stack.
-                            for level in range(top, -1, -1):
-                                x = stack[level]
-                                y = adj[edge_pos[x]]
-                                match_left[x] = y
-                                match_right[y] = x
-                            size += 1
-                            top = -1
-                            advanced = True
-                            break
-                        edge_pos[u] += 1
-                    elif dist[w] == dist[u] + 1:
-                        top += 1
-                        stack[top] = w
-                        advanced = True
-                        break
-                    else:
-                        edge_pos[u] += 1
-                if top < 0:
-                    break
-                if not advanced:
-                    dist[u] = inf
-                    top -= 1
-                    if top >= 0:
-                        edge_pos[stack[top]] += 1
+from ._matching import max_flow, max_matching
 
 
 @numba.njit(cache=True)
@@ -133,88 +34,6 @@ def _threshold_graph(a, b, tree_b, rows, t):
 
 
 @numba.njit(cache=True)
-def _max_flow(ptr, adj, demand, capacity):
-    """Largest flow from rows (each sending at most ``demand[r]``) along the edges
-    ``(ptr, adj)`` into columns (each taking at most ``capacity[j]``): the matching test
-    of points with multiplicities. A greedy start, then augmenting paths found by one
-    breadth-first search from every row with demand left, back along edges that carry
-    flow; each path carries as much as it can, so the number of searches depends on the
-    distinct points, not on their copies."""
-    n_rows, n_cols, n_edges = len(demand), len(capacity), len(adj)
-    row_of, t_ptr, t_edge = transpose(ptr, adj, n_cols)
-    flow = np.zeros(n_edges, np.int64)
-    sent = np.zeros(n_rows, np.int64)
-    taken = np.zeros(n_cols, np.int64)
-    for r in range(n_rows):
-        for e in range(ptr[r], ptr[r + 1]):
-            push = min(demand[r] - sent[r], capacity[adj[e]] - taken[adj[e]])
-            if push > 0:
-                flow[e] += push
-                sent[r] += push
-                taken[adj[e]] += push
-    total = sent.sum()
-    via_col = np.empty(n_cols, np.int64)
-    via_row = np.empty(n_rows, np.int64)
-    seen_row = np.empty(n_rows, np.bool_)
-    seen_col = np.empty(n_cols, np.bool_)
-    queue = np.empty(n_rows, np.int64)
-    while True:
-        seen_row[:] = False
-        seen_col[:] = False
-        tail = 0
-        for r in range(n_rows):
-            if sent[r] < demand[r]:
-                seen_row[r] = True
-                via_row[r] = -1
-                queue[tail] = r
-                tail += 1
-        head = 0
-        end = -1
-        while head < tail and end < 0:
-            r = queue[head]
-            head += 1
-            for e in range(ptr[r], ptr[r + 1]):
-                j = adj[e]
-                if seen_col[j]:
-                    continue
-                seen_col[j] = True
-                via_col[j] = e
-                if taken[j] < capacity[j]:
-                    end = j
-                    break
-                for k in range(t_ptr[j], t_ptr[j + 1]):
-                    back = t_edge[k]
-                    w = row_of[back]
-                    if flow[back] > 0 and not seen_row[w]:
-                        seen_row[w] = True
-                        via_row[w] = back
-                        queue[tail] = w
-                        tail += 1
-        if end < 0:
-            return total
-        amount = capacity[end] - taken[end]
-        j = end
-        while True:
-            r = row_of[via_col[j]]
-            if via_row[r] < 0:
-                amount = min(amount, demand[r] - sent[r])
-                break
-            amount = min(amount, flow[via_row[r]])
-            j = adj[via_row[r]]
-        j = end
-        while True:
-            flow[via_col[j]] += amount
-            r = row_of[via_col[j]]
-            if via_row[r] < 0:
-                sent[r] += amount
-                break
-            flow[via_row[r]] -= amount
-            j = adj[via_row[r]]
-        taken[end] += amount
-        total += amount
-
-
-@numba.njit(cache=True)
 def _covers(a, count_a, b, count_b, tree_b, t, guess):
     """Whether the points of ``a`` that cannot go to the diagonal at ``t`` can all be
     matched into ``b`` with L-infinity cost at most ``t``. Empty counts: every point
@@ -228,14 +47,14 @@ def _covers(a, count_a, b, count_b, tree_b, t, guess):
         if len(rows) > len(b):
             return False
         ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
-        size, match_left, _ = _max_matching(ptr, adj, len(rows), len(b), guess[rows])
+        size, match_left, _ = max_matching(ptr, adj, len(rows), len(b), guess[rows])
         guess[rows] = match_left
         return size == len(rows)
     demand = count_a[rows]
     if demand.sum() > count_b.sum():
         return False
     ptr, adj = _threshold_graph(a, b, tree_b, rows, t)
-    return _max_flow(ptr, adj, demand, count_b) == demand.sum()
+    return max_flow(ptr, adj, demand, count_b) == demand.sum()
 
 
 @numba.njit(cache=True)
@@ -503,7 +322,7 @@ def bottleneck_partners(a, b, t):
     sub_adj = np.empty(sub_ptr[-1], np.int64)
     for r in range(len(rows)):
         sub_adj[sub_ptr[r] : sub_ptr[r + 1]] = adj[ptr[rows[r]] : ptr[rows[r] + 1]]
-    _, sub_left, _ = _max_matching(sub_ptr, sub_adj, len(rows), m, np.full(len(rows), -1))
+    _, sub_left, _ = max_matching(sub_ptr, sub_adj, len(rows), m, np.full(len(rows), -1))
     match_a = np.full(n, -1, np.int64)
     match_b = np.full(m, -1, np.int64)
     for r in range(len(rows)):
