@@ -79,10 +79,7 @@ def check_mesh(mesh, *, index: int | None = None) -> tuple[np.ndarray, np.ndarra
 
 def check_vertices(vertices, place: str = "mesh") -> np.ndarray:
     """``vertices`` as a C-contiguous float64 ``(n, 3)`` array of finite coordinates."""
-    try:
-        vertices = np.asarray(vertices)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{place}: vertices must be an array: {exc}") from exc
+    vertices = _as_array(vertices, "vertices", place)
     if vertices.dtype.kind not in "fiu" or vertices.ndim != 2 or vertices.shape[1] != 3:
         raise ValueError(
             f"{place}: vertices must be a numeric array of shape (n_vertices, 3), "
@@ -102,10 +99,7 @@ def check_faces(faces, n_vertices: int, place: str = "mesh") -> np.ndarray:
 
     Integral floats are accepted.
     """
-    try:
-        faces = np.asarray(faces)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{place}: faces must be an array: {exc}") from exc
+    faces = _as_array(faces, "faces", place)
     if faces.ndim != 2 or faces.shape[1] != 3:
         raise ValueError(
             f"{place}: faces must be an array of shape (n_faces, 3), got shape {faces.shape}"
@@ -115,33 +109,37 @@ def check_faces(faces, n_vertices: int, place: str = "mesh") -> np.ndarray:
             raise ValueError(f"{place}: face indices must be integers")
     elif faces.dtype.kind not in "iu":
         raise ValueError(f"{place}: face indices must be integers, got dtype {faces.dtype}")
-    if len(faces) and (faces.min() < 0 or faces.max() >= n_vertices):
-        bad = int(np.flatnonzero(((faces < 0) | (faces >= n_vertices)).any(axis=1))[0])
-        raise ValueError(
-            f"{place}: face {bad} has index {faces[bad].tolist()} out of range for "
-            f"{n_vertices} vertices"
-        )
-    return np.ascontiguousarray(faces, dtype=np.int64)
+    return _in_range(faces, n_vertices, "face", place)
 
 
 def check_edges(edges, n_vertices: int, place: str = "mesh") -> np.ndarray:
     """``edges`` as a C-contiguous int64 ``(m, 2)`` array of indices below ``n_vertices``."""
-    try:
-        edges = np.asarray(edges)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{place}: edges must be an array: {exc}") from exc
+    edges = _as_array(edges, "edges", place)
     if edges.ndim != 2 or edges.shape[1] != 2 or edges.dtype.kind not in "iu":
         raise ValueError(
             f"{place}: edges must be an integer array of shape (n_edges, 2), got dtype "
             f"{edges.dtype} and shape {edges.shape}"
         )
-    if len(edges) and (edges.min() < 0 or edges.max() >= n_vertices):
-        bad = int(np.flatnonzero(((edges < 0) | (edges >= n_vertices)).any(axis=1))[0])
+    return _in_range(edges, n_vertices, "edge", place)
+
+
+def _as_array(array, what: str, place: str) -> np.ndarray:
+    try:
+        return np.asarray(array)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{place}: {what} must be an array: {exc}") from exc
+
+
+def _in_range(indices: np.ndarray, n_vertices: int, what: str, place: str) -> np.ndarray:
+    """Integer ``indices`` (one row per face or edge) as C-contiguous int64, or a
+    ``ValueError`` naming the first row with an index out of ``range(n_vertices)``."""
+    if len(indices) and (indices.min() < 0 or indices.max() >= n_vertices):
+        bad = int(np.flatnonzero(((indices < 0) | (indices >= n_vertices)).any(axis=1))[0])
         raise ValueError(
-            f"{place}: edge {bad} has index {edges[bad].tolist()} out of range for "
+            f"{place}: {what} {bad} has index {indices[bad].tolist()} out of range for "
             f"{n_vertices} vertices"
         )
-    return np.ascontiguousarray(edges, dtype=np.int64)
+    return np.ascontiguousarray(indices, dtype=np.int64)
 
 
 def check_values(values, n_vertices: int, place: str = "values") -> np.ndarray:
