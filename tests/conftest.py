@@ -127,7 +127,13 @@ def estimator_round_trip():
 
 
 # CI runs the property tests on a fixed set of examples, so that a run is reproducible;
-# locally hypothesis explores new examples every time.
-settings.register_profile("ci", derandomize=True, print_blob=True)
-if os.environ.get("CI"):
-    settings.load_profile("ci")
+# locally hypothesis explores new examples every time. `.ci/run` sets CI; with CI set,
+# the "ci" profile wins over whatever else selects a profile (`--hypothesis-profile` in
+# PYTEST_ADDOPTS, a plugin), since it is loaded after every other plugin has configured.
+settings.register_profile("ci", settings.get_profile("ci"), derandomize=True, database=None)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_configure(config):
+    if os.environ.get("CI"):
+        settings.load_profile("ci")

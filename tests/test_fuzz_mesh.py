@@ -1,5 +1,6 @@
 """Fuzzing the mesh input and the eigen stage with random small meshes."""
 
+import os
 import warnings
 
 import numpy as np
@@ -45,3 +46,11 @@ def test_random_meshes_give_finite_fields_or_a_clear_error():
     outcomes = []
     _check_random_mesh(outcomes)
     assert outcomes.count("solved") >= 0.6 * len(outcomes), outcomes
+
+
+def test_ci_runs_the_property_tests_deterministically():
+    """Under CI (`.ci/run` sets it), hypothesis draws the same examples on every run."""
+    if not os.environ.get("CI"):
+        pytest.skip("CI is not set: hypothesis explores new examples on every run")
+    assert settings.get_current_profile_name() == "ci"
+    assert settings.default.derandomize and settings.default.database is None
