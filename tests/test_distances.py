@@ -111,10 +111,11 @@ def test_bottleneck_of_large_diagrams_equals_brute_force_and_hera(kind, seed):
     assert ours == pytest.approx(hera.bottleneck_distance(a, b, delta=0), abs=5e-10)
 
 
-def test_gudhi_exact_bottleneck_is_wrong_on_this_pair():
-    """Why gudhi's bottleneck distance is not one of our oracles: on this pair its exact
-    mode (e=0) returns 0.4206, the cost of a matching that is not optimal; the optimum,
-    found by brute force, by hera with delta=0 and by us, is 0.3954."""
+def test_bottleneck_of_the_pair_gudhi_misses_equals_brute_force(record_property):
+    """The pair on which gudhi's exact bottleneck (e=0, gudhi 3.13) returns the cost of a
+    matching that is not optimal: our value and our matching against brute force and
+    hera (delta=0). gudhi's value is recorded as information only (the test property
+    ``gudhi_bottleneck``), so that a gudhi release that fixes it changes nothing here."""
     a = np.array([[0.26207070, 0.89257110], [0.49984161, 1.08721214], [0.29768515, 1.00571336]])
     b = np.array(
         [
@@ -125,12 +126,13 @@ def test_gudhi_exact_bottleneck_is_wrong_on_this_pair():
             [0.50792266, 0.68057705],
         ]
     )
-    ours = bottleneck_distance(a, b)
-    assert ours == brute_force_bottleneck(a, b) == pytest.approx(0.39537178)
+    ours, matched = bottleneck_distance(a, b, matching=True)
+    assert ours == brute_force_bottleneck(a, b) == bottleneck_distance(b, a)
     assert ours == pytest.approx(hera.bottleneck_distance(a, b, delta=0), abs=1e-12)
-    # gudhi 3.13 (a fixed gudhi fails here: then it can join the oracles above)
-    assert gudhi.bottleneck_distance(a, b, 0) == pytest.approx(0.42061718)
-    assert gudhi.bottleneck_distance(a, b, 0) > ours + 0.02
+    assert matching_cost(a, b, matched, 1.0).max() == ours
+    assert sorted(i for i, _ in matched if i >= 0) == list(range(len(a)))
+    assert sorted(j for _, j in matched if j >= 0) == list(range(len(b)))
+    record_property("gudhi_bottleneck", gudhi.bottleneck_distance(a, b, 0))
 
 
 @settings(max_examples=200, deadline=None)

@@ -14,12 +14,12 @@ from ._kdtree import ground
 @numba.njit(cache=True)
 def transport_distinct(a, supply, b, capacity_b, order, internal_p, inv_scale, cap):
     """Optimal transport between distinct points with multiplicities (diagrams with
-    many exact duplicates: integer-valued functions, plateaus): the same row form as
-    :func:`_transport_rows` with row ``i`` sending ``supply[i]`` units and column ``j``
-    taking at most ``capacity_b[j]``, solved by :func:`min_cost_flow`. A matching of
-    the expanded diagrams has the same cost as the flow, and every flow of integers
-    splits into one, so the optimum is the same; the work depends on the number of
-    distinct points. Returns the total and ``(ptr, cols, flow)`` per distinct row."""
+    many exact duplicates: integer-valued functions, plateaus): the row form of the
+    assignment with row ``i`` sending ``supply[i]`` units and column ``j`` taking at
+    most ``capacity_b[j]``, solved by :func:`min_cost_flow`. A matching of the expanded
+    diagrams has the same cost as the flow, and every flow of integers splits into one,
+    so the optimum is the same; the work depends on the number of distinct points.
+    Returns the total and ``(ptr, cols, flow)`` per distinct row."""
     n, m = len(a), len(b)
     da = to_diagonal(a, order, internal_p, inv_scale, cap)
     db = to_diagonal(b, order, internal_p, inv_scale, cap)

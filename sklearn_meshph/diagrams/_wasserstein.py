@@ -8,7 +8,8 @@ distance: the optimum is then at least 1, and never lost in the rounding of the 
 potentials. Orders 1 and 2 use the power of two just above the largest cost of a point
 to the diagonal (every cost worth considering is then at most 2, and scaling by a power
 of two is exact, so they give the bits of an unscaled computation), and fall back to the
-bottleneck scale when the optimum comes out below 1e-250.
+bottleneck scale when the optimum comes out so small that it may have underflowed
+(below ``_TINY``).
 """
 
 from __future__ import annotations
@@ -156,7 +157,7 @@ def wasserstein_scaled(a, b, order, internal_p):
     """``(s, total)`` with the q-Wasserstein distance ``s * total^(1/order)``.
 
     Equal diagrams give exactly 0: in floating point the solver's reduced costs cannot
-    tell the identity matching from one that swaps two points 1e-16 apart.
+    tell the identity matching from one that swaps two points an ulp apart.
     """
     if not precedes(a, b):  # so that d(a, b) == d(b, a) bit for bit
         a, b = b, a
