@@ -163,14 +163,15 @@ def clean_mesh(
     The policy, in order:
 
     0. with ``weld=True``, vertices at the same position are welded: two vertices
-       whose coordinates all differ by at most ``1e-10`` times the bounding-box
-       diagonal (:data:`WELD_RTOL`; exactly equal ones always) become one, the one of
-       lowest index (transitively), and faces are renumbered to it. This joins the
-       triangle soups of STL files and the vertices that OBJ files split along UV
-       seams; a mesh without coincident vertices is left exactly as it is;
+       whose coordinates all differ by at most :data:`WELD_RTOL` times the bounding-box
+       diagonal (exactly equal ones always) become one, the one of lowest index
+       (transitively), and faces are renumbered to it. This joins the triangle soups of
+       STL files and the vertices that OBJ files split along UV seams; a mesh without
+       coincident vertices is left exactly as it is;
     1. faces with a repeated vertex index, and degenerate faces (collinear or coincident
-       vertices: twice the area at most ``1e-12`` times the longest edge squared) are
-       dropped: they have no area and would make the cotangent weights infinite;
+       vertices: twice the area at most ``DEGENERATE_SINE`` times the longest edge
+       squared) are dropped: they have no area and would make the cotangent weights
+       infinite;
     2. faces listing the same three vertices as an earlier face are dropped;
     3. vertices referenced by no remaining face are dropped;
     4. connected components (through shared vertices): with ``components="largest"``
@@ -200,7 +201,7 @@ def clean_mesh(
         vertex (or -1), and ``report``, a :class:`CleaningReport`. This function does
         not warn; :class:`LaplacianEigenTransformer` and
         :func:`laplacian_eigenfunctions` emit a :class:`MeshCleaningWarning` when the
-        report says more than :data:`LOSS_THRESHOLD` (1%) of the vertices or of the
+        report says more than :data:`LOSS_THRESHOLD` of the vertices or of the
         area was dropped.
 
     Examples

@@ -86,7 +86,8 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
         The simplicial complex: vertices, edges and triangles of the mesh as given (no
         cleaning: an unreferenced vertex is a component of its own). A point cloud (an
         ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points) is filtered on
-        its symmetric 10-nearest-neighbour graph.
+        its symmetric k-nearest-neighbour graph
+        (:func:`sklearn_meshph.pointcloud.graph.knn_graph`).
     values : array-like of shape (n_vertices,)
         The function, finite.
 

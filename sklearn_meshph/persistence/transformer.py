@@ -81,7 +81,7 @@ class LowerStarPersistence(SampleTransformer):
     in float64 by union-find over the vertices in value order (elder rule, ties broken by
     vertex index), the edge adjacency built once per mesh and shared by its functions.
     On a point cloud (a field without faces, or a ``(points, values)`` pair) the complex
-    is its symmetric 10-nearest-neighbour graph (``ScalarField.edges``): every H0
+    is its symmetric k-nearest-neighbour graph (``ScalarField.edges``): every H0
     diagram is computed on it exactly as on a mesh's edges, and the essential H1
     diagram of ``"extended"`` is empty (a graph's cycles come from the neighbourhood
     size, not from the surface).

@@ -44,8 +44,9 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     (:func:`._triangulation.local_delaunay_fans`). Returns ``(triangles, a, b)``: the
     triangles ``(m, 3)`` as point indices ``(i, j, k)``, and the tangent coordinates of
     ``j`` and ``k`` relative to ``i`` in the plane of ``i``, ``(m, 2)`` each, counter-
-    clockwise. Degenerate triangles (twice the area at most ``1e-12`` times the longest
-    edge squared) are dropped. ``points`` must be distinct.
+    clockwise. Degenerate triangles (twice the area at most
+    :data:`sklearn_meshph.mesh.DEGENERATE_SINE` times the longest edge squared) are
+    dropped. ``points`` must be distinct.
     """
     _, neighbors = nearest(points, n_neighbors)
     relative = points[neighbors] - points[:, None, :]
@@ -93,11 +94,11 @@ def point_cloud_laplacian(
     the fans of its three corners. Neighbourhoods that disagree contribute each of their
     choices with its share; every triangle's stiffness is positive semi-definite, so the
     sum is too. Measuring in the tangent planes leaves out the normal component of the
-    noise, which would otherwise add area at the sampling scale (the spectrum of a
-    rough sample drops by 20% with noise at 40% of the spacing). This is the local
+    noise, which would otherwise add area at the sampling scale and lower the spectrum
+    of a rough sample. This is the local
     triangulation of [1]_ (section 5.7) with an exact neighbour search, tangent-plane
     geometry and without the tufted cover and intrinsic Delaunay flips, which on
-    randomly sampled clouds lower the spectrum by about 5% (the measurements are in
+    randomly sampled clouds lower the spectrum (the measurements are in
     ``docs/point_clouds.md``).
 
     References

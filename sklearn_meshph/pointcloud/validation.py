@@ -22,7 +22,7 @@ def check_point_cloud(points, *, index: int | None = None) -> np.ndarray:
     Parameters
     ----------
     points : ndarray of shape (n, 3) or trimesh.PointCloud
-        At least ``MIN_POINTS`` (4) points with finite coordinates. Exact duplicates
+        At least ``MIN_POINTS`` points with finite coordinates. Exact duplicates
         are accepted here; the eigen stage merges them (see
         :class:`LaplacianEigenTransformer`).
     index : int, optional
@@ -36,7 +36,7 @@ def check_point_cloud(points, *, index: int | None = None) -> np.ndarray:
     ------
     ValueError
         If the array is not numeric of shape ``(n, 3)``, a coordinate is not finite,
-        or there are fewer than 4 points. The message names the sample.
+        or there are fewer than ``MIN_POINTS`` points. The message names the sample.
 
     Examples
     --------
