@@ -223,10 +223,11 @@ def test_stray_points_are_other_components_and_change_nothing(shape_clouds):
     median = np.median(distances[:n, :n][y[:, None] != y[None, :]])
     # Before: 5.3 and 4.8 times the median distance between classes.
     assert distances[n, 0] < 0.05 * median and distances[n + 1, 0] < 0.05 * median
-    clean, one, five = fields([clouds[0], stray, cluster], eigen_index=1)
+    clean, one, five, tiny = fields([clouds[0], stray, cluster, cluster * 1e-100], eigen_index=1)
     assert one.cleaning.n_other_components == five.cleaning.n_other_components == 1
     assert (one.cleaning.n_component_vertices, five.cleaning.n_component_vertices) == (1, 5)
     assert one.n_vertices == five.n_vertices == clean.n_vertices
+    np.testing.assert_array_equal(tiny.input_to_kept, five.input_to_kept)  # scale-free
     np.testing.assert_array_equal(np.delete(five.input_to_kept, range(700, 705)), range(1500))
     np.testing.assert_array_equal(five.input_to_kept[700:705], -1)
     np.testing.assert_allclose(five.eigenvalues, clean.eigenvalues, rtol=1e-9)
