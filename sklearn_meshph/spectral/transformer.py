@@ -334,6 +334,9 @@ class LaplacianEigenTransformer(SampleTransformer):
             k indices, and ``eigenvalues`` the matching eigenvalues. When cleaning
             changed the vertex set, ``vertex_indices`` and ``input_to_kept`` map it to
             the input's vertices and back; ``cleaning`` reports what was dropped.
+            ``spectrum`` holds the first ``n_eigenpairs`` eigenvalues and
+            ``column_names`` what each column is (``"eigenfunction 1"``, ``"heat kernel
+            signature t=..."``).
 
         Warns
         -----
