@@ -25,6 +25,20 @@ def augment(path, row4col, col4row, j, root):
 
 
 @numba.njit(cache=True)
+def settle_columns(v, dist, done, touched, n_touched, total):
+    """End a shortest-path search that reached its sink at distance ``total``: lower
+    the potential of each column it finished by ``total - dist`` (reduced costs stay
+    non-negative, and 0 along the path), and clear its marks on the columns it
+    touched."""
+    for k in range(n_touched):
+        j = touched[k]
+        if done[j]:
+            v[j] -= total - dist[j]
+        dist[j] = np.inf
+        done[j] = False
+
+
+@numba.njit(cache=True)
 def precedes(a, b):
     """A total order on diagrams (size, then values), to fix argument order."""
     if len(a) != len(b):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._assignment import augment, heap_pop, heap_push
+from ._assignment import augment, heap_pop, heap_push, settle_columns
 
 
 @numba.njit(cache=True)
@@ -84,12 +84,7 @@ def solve(ptr, cols, costs, n, n_cols):
         for k in range(1, n_visited):
             r = visited[k]
             u[r] += min_value - dist[col4row[r]]
-        for k in range(n_touched):
-            j = touched[k]
-            if done[j]:
-                v[j] -= min_value - dist[j]
-            dist[j] = np.inf
-            done[j] = False
+        settle_columns(v, dist, done, touched, n_touched, min_value)
         augment(path, row4col, col4row, sink, root)
     return u, v, col4row, row4col
 

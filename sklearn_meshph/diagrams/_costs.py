@@ -44,6 +44,26 @@ def cost(g, order, inv_scale, cap):
 
 
 @numba.njit(cache=True, inline="always")
+def pair_cost(a, i, b, j, order, internal_p, inv_scale, cap):
+    """Scaled cost of matching point ``i`` of ``a`` with point ``j`` of ``b``."""
+    g = ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p)
+    return cost(g, order, inv_scale, cap)
+
+
+@numba.njit(cache=True, inline="always")
+def keep_pair(cols, costs, k, j, c, da_i, db_j, cap):
+    """Write pair ``j`` of scaled cost ``c`` at ``k`` of the row being filled when it
+    costs less than sending both points to the diagonal (and than the cap); returns the
+    row's new end. Any matching that uses a pair left out costs no less after sending
+    both of its points to the diagonal instead."""
+    if c < min(da_i + db_j, cap):
+        cols[k] = j
+        costs[k] = c - db_j
+        return k + 1
+    return k
+
+
+@numba.njit(cache=True, inline="always")
 def diagonal_factor(internal_p):
     """Ground distance of ``(b, d)`` to the diagonal, per unit of ``(d - b) / 2``."""
     return 1.0 if internal_p == np.inf else 2.0 ** (1.0 / internal_p)
@@ -90,12 +110,8 @@ def candidate_edges(a, b, da, db, order, internal_p, inv_scale, cap):
         first = k
         for s in range(lo, hi):
             j = by_birth[s]
-            g = ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p)
-            c = cost(g, order, inv_scale, cap)
-            if c < min(da[i] + db[j], cap):
-                cols[k] = j
-                costs[k] = c - db[j]
-                k += 1
+            c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
+            k = keep_pair(cols, costs, k, j, c, da[i], db[j], cap)
         ascending = first + np.argsort(costs[first:k], kind="mergesort")
         cols[first:k] = cols[ascending]
         costs[first:k] = costs[ascending]

@@ -6,9 +6,16 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._assignment import DIAGONAL, heap_pop, heap_push, path_room, push_path, transpose
-from ._costs import candidate_edges, cost, to_diagonal
-from ._kdtree import ground
+from ._assignment import (
+    DIAGONAL,
+    heap_pop,
+    heap_push,
+    path_room,
+    push_path,
+    settle_columns,
+    transpose,
+)
+from ._costs import candidate_edges, pair_cost, to_diagonal
 
 
 @numba.njit(cache=True)
@@ -45,8 +52,7 @@ def transport_distinct(a, supply, b, capacity_b, order, internal_p, inv_scale, c
             if j >= m:
                 total += flow[e] * da[i]
             else:
-                g = ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p)
-                total += flow[e] * cost(g, order, inv_scale, cap)
+                total += flow[e] * pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
     return total, (ptr, cols, flow)
 
 
@@ -136,12 +142,7 @@ def min_cost_flow(ptr, cols, costs, supply, capacity, n):
                 w = visited[k]
                 u[w] += total - dist_row[w]
                 dist_row[w] = np.inf
-            for k in range(n_touched):
-                j = touched[k]
-                if done[j]:
-                    v[j] -= total - dist_col[j]
-                dist_col[j] = np.inf
-                done[j] = False
+            settle_columns(v, dist_col, done, touched, n_touched, total)
             amount = min(remaining[root], capacity[sink] - inflow[sink])
             amount = path_room(reach_col, reach_row, row_of, cols, flow, sink, amount)[0]
             push_path(reach_col, reach_row, row_of, cols, flow, sink, amount)

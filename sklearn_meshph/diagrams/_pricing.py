@@ -9,8 +9,8 @@ import numpy as np
 
 from ._assignment import reserve
 from ._assignment_solver import solve
-from ._costs import cost
-from ._kdtree import STACK, box_gap, build, ground, nearest, node_maxima
+from ._costs import cost, keep_pair, pair_cost
+from ._kdtree import STACK, box_gap, build, nearest, node_maxima
 
 # Neighbours per point in the first sparse problem, and new edges per row per round.
 NEIGHBOURS = 8
@@ -85,12 +85,8 @@ def _neighbour_edges(a, b, tree, da, db, order, internal_p, inv_scale, cap, k, w
     for i in range(n):
         for f in range(count[i]):
             j = chosen[i, f]
-            g = ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p)
-            c = cost(g, order, inv_scale, cap)
-            if c < min(da[i] + db[j], cap):
-                cols[e] = j
-                costs[e] = c - db[j]
-                e += 1
+            c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
+            e = keep_pair(cols, costs, e, j, c, da[i], db[j], cap)
         costs[e] = da[i]
         e += 1
         ptr[i + 1] = e
@@ -141,8 +137,7 @@ def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, ca
                 j = order_[r]
                 if present[j]:
                     continue
-                g = ground(abs(x - b[j, 0]), abs(y - b[j, 1]), internal_p)
-                c = cost(g, order, inv_scale, cap)
+                c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
                 reduced = c - db[j] - u[i] - v[j]
                 if reduced < -tol and c < min(da[i] + db[j], cap):
                     found_j[count] = j
@@ -157,9 +152,8 @@ def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, ca
         new_cols, new_costs = reserve(new_cols, new_costs, e, e + count)
         for r in range(count):
             j = found_j[r]
-            g = ground(abs(x - b[j, 0]), abs(y - b[j, 1]), internal_p)
             new_cols[e] = j
-            new_costs[e] = cost(g, order, inv_scale, cap) - db[j]
+            new_costs[e] = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap) - db[j]
             e += 1
         new_ptr[i + 1] = e
     return new_ptr, new_cols[:e], new_costs[:e]

@@ -20,8 +20,7 @@ import numpy as np
 from ._assignment import DIAGONAL, collapse, precedes
 from ._assignment_solver import solve
 from ._bottleneck import bottleneck_finite
-from ._costs import candidate_edges, cost, diagonal_factor, power_of_two_above, to_diagonal
-from ._kdtree import ground
+from ._costs import candidate_edges, diagonal_factor, pair_cost, power_of_two_above, to_diagonal
 from ._min_cost_flow import partners_from_flows, transport_distinct
 from ._pricing import sparse_solve
 
@@ -91,8 +90,7 @@ def _transport_rows(a, b, order, internal_p, inv_scale, cap):
             total += da[i]
             col4row[i] = DIAGONAL
         else:
-            g = ground(abs(a[i, 0] - b[j, 0]), abs(a[i, 1] - b[j, 1]), internal_p)
-            total += cost(g, order, inv_scale, cap)
+            total += pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
     return total, col4row
 
 
