@@ -11,6 +11,7 @@ persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
 beside them.
 """
 
+from ._version import __version__ as __version__
 from .combine import CombinedDistance, FeatureDistance
 from .datasets import load_mesh_folder, make_shapes, sample_point_cloud
 from .diagrams import (
@@ -61,8 +62,6 @@ from .vectorization import (
     Silhouette,
     SlicedWassersteinKernel,
 )
-
-__version__ = "0.1.0.dev0"
 
 __all__ = [
     "CacheWarning",

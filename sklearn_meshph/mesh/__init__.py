@@ -11,7 +11,7 @@
 - :mod:`.graph`: compiled union-find, connected components and the edge adjacency.
 """
 
-from ._geometry import DEGENERATE_SINE, smallest_angle_sines, unit_box
+from ._geometry import DEGENERATE_SINE, smallest_angle_sines, triangle, unit_box
 from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
@@ -26,6 +26,7 @@ __all__ = [
     "check_mesh",
     "clean_mesh",
     "smallest_angle_sines",
+    "triangle",
     "unit_box",
     "weld_vertices",
 ]

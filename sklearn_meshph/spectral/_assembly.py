@@ -5,7 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..mesh._geometry import triangle
+from ..mesh import triangle
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._version import VERSION
 from ..mesh.cleaning import CleaningReport, CleanMesh
 
 __all__ = [
@@ -203,10 +204,8 @@ class EigenCache:
     @staticmethod
     def key(vertices, faces, settings: dict) -> str:
         """The entry's name: a hash of the input mesh and every setting of the solve."""
-        from .. import __version__
-
         digest = hashlib.sha256()
-        head = {"format": _FORMAT, "version": __version__, "numerics": NUMERICS_VERSION}
+        head = {"format": _FORMAT, "version": VERSION, "numerics": NUMERICS_VERSION}
         digest.update(json.dumps({**head, **settings}, sort_keys=True, default=str).encode())
         for array in (vertices, faces):
             array = np.ascontiguousarray(array)
