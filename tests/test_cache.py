@@ -65,7 +65,7 @@ def test_a_crafted_pickle_in_the_cache_cannot_run_code(tmp_path):
         (entry / name).write_bytes(payload)
     # An object array saved by numpy (pickled inside a valid .npy) is refused too.
     np.save(entry / "faces.npy", np.array([Exploit()], dtype=object), allow_pickle=True)
-    with pytest.warns(CacheWarning):
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
         again = solve(tmp_path)
     assert not marker.exists()
     np.testing.assert_array_equal(again.values, first.values)

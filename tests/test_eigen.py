@@ -181,7 +181,8 @@ def test_bad_meshes_name_the_sample(bad, error, message):
 
 def test_index_beyond_the_vertex_count():
     triangle = (np.eye(3), np.array([[0, 1, 2]]))
-    with pytest.warns(RepeatedEigenvalueWarning):  # an equilateral triangle
+    # An equilateral triangle: eigenvalues 1 and 2 coincide.
+    with pytest.warns(RepeatedEigenvalueWarning, match="sample 0: eigenvalue 2 .*multiplicity 2"):
         field = LaplacianEigenTransformer(eigen_index=2).fit_transform([triangle])[0]
     assert np.isfinite(field.values).all()
     with pytest.raises(ValueError, match="sample 0: eigen_index 3 needs at least 4 vertices"):
