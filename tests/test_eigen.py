@@ -292,3 +292,15 @@ def test_a_mesh_of_needles_warns_that_its_spectrum_means_little():
     with warnings.catch_warnings():
         warnings.simplefilter("error", MeshQualityWarning)
         LaplacianEigenTransformer(random_state=0).fit_transform([bumpy(), needle_strip(height=0.5)])
+
+
+def test_scalar_field_column_names_are_checked_and_default_to_function_j():
+    vertices, faces = irregular_ellipsoid(1)
+    values = np.zeros((len(vertices), 2))
+    assert ScalarField(vertices, faces, values).column_names == ("function 0", "function 1")
+    named = ScalarField(vertices, faces, values, column_names=["a", "b"])
+    assert named.column_names == ("a", "b")
+    with pytest.raises(ValueError, match="1 column_names for 2 columns"):
+        ScalarField(vertices, faces, values, column_names=("a",))
+    with pytest.raises(ValueError, match="column_names must be a sequence of str"):
+        ScalarField(vertices, faces, values, column_names="ab")
