@@ -164,6 +164,22 @@ def path_room(via_col, via_row, row_of, cols, flow, end, amount):
 
 
 @numba.njit(cache=True)
+def rows_back(j, t_ptr, t_edge, row_of, flow, reached, via_row, out, n_out):
+    """Extend a flow search back from column ``j``: each row not ``reached`` yet that
+    sends flow into it is marked reached along that edge (``via_row``) and appended to
+    ``out`` after its first ``n_out`` entries; returns the new count."""
+    for k in range(t_ptr[j], t_ptr[j + 1]):
+        e = t_edge[k]
+        r = row_of[e]
+        if flow[e] > 0 and not reached[r]:
+            reached[r] = True
+            via_row[r] = e
+            out[n_out] = r
+            n_out += 1
+    return n_out
+
+
+@numba.njit(cache=True)
 def push_path(via_col, via_row, row_of, cols, flow, end, amount):
     """Push ``amount`` along the path of :func:`path_room`: forward along the edges that
     reach its columns, back along those that reach its rows."""

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._assignment import path_room, push_path, transpose
+from ._assignment import path_room, push_path, rows_back, transpose
 
 
 @numba.njit(cache=True)
@@ -160,14 +160,7 @@ def max_flow(ptr, adj, demand, capacity):
                 if taken[j] < capacity[j]:
                     end = j
                     break
-                for k in range(t_ptr[j], t_ptr[j + 1]):
-                    back = t_edge[k]
-                    w = row_of[back]
-                    if flow[back] > 0 and not seen_row[w]:
-                        seen_row[w] = True
-                        via_row[w] = back
-                        queue[tail] = w
-                        tail += 1
+                tail = rows_back(j, t_ptr, t_edge, row_of, flow, seen_row, via_row, queue, tail)
         if end < 0:
             return total
         amount, root = path_room(

@@ -12,6 +12,7 @@ from ._assignment import (
     heap_push,
     path_room,
     push_path,
+    rows_back,
     settle_columns,
     transpose,
 )
@@ -78,6 +79,7 @@ def min_cost_flow(ptr, cols, costs, supply, capacity, n):
     v = np.zeros(n_cols)
     dist_col = np.full(n_cols, np.inf)
     dist_row = np.full(n, np.inf)
+    reached = np.zeros(n, np.bool_)  # the rows with a finite dist_row
     done = np.zeros(n_cols, np.bool_)
     reach_col = np.empty(n_cols, np.int64)  # the edge a column was reached along
     reach_row = np.empty(n, np.int64)  # the flow edge a row was reached back along
@@ -92,6 +94,7 @@ def min_cost_flow(ptr, cols, costs, supply, capacity, n):
             n_visited = 1
             visited[0] = root
             dist_row[root] = 0.0
+            reached[root] = True
             reach_row[root] = -1  # where paths back end
             pending[0] = root
             n_pending = 1
@@ -124,16 +127,14 @@ def min_cost_flow(ptr, cols, costs, supply, capacity, n):
                     if inflow[j] < capacity[j]:
                         sink = j
                         break
-                    for k in range(t_ptr[j], t_ptr[j + 1]):
-                        e = t_edge[k]
-                        r = row_of[e]
-                        if flow[e] > 0 and dist_row[r] == np.inf:
-                            dist_row[r] = top
-                            reach_row[r] = e
-                            visited[n_visited] = r
-                            n_visited += 1
-                            pending[n_pending] = r
-                            n_pending += 1
+                    first = n_pending
+                    n_pending = rows_back(
+                        j, t_ptr, t_edge, row_of, flow, reached, reach_row, pending, n_pending
+                    )
+                    for k in range(first, n_pending):
+                        dist_row[pending[k]] = top
+                        visited[n_visited] = pending[k]
+                        n_visited += 1
                     if n_pending > 0:
                         break
             # The private diagonal column of a row with supply left always has room.
@@ -142,6 +143,7 @@ def min_cost_flow(ptr, cols, costs, supply, capacity, n):
                 w = visited[k]
                 u[w] += total - dist_row[w]
                 dist_row[w] = np.inf
+                reached[w] = False
             settle_columns(v, dist_col, done, touched, n_touched, total)
             amount = min(remaining[root], capacity[sink] - inflow[sink])
             amount = path_room(reach_col, reach_row, row_of, cols, flow, sink, amount)[0]
