@@ -1,9 +1,16 @@
-"""The user guide and the API reference build without a warning."""
+"""The user guide and the API reference build without a warning, and the code blocks
+of README.md and docs/*.md run as written."""
 
+import json
+import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+from conftest import DATA_DIR
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -54,3 +61,144 @@ def test_estimators_and_command_line_offer_exactly_the_registered_options():
         assert not constraint("not-an-option")
         if family in actions:
             assert tuple(actions[family].choices) == names
+
+
+# ---------------------------------------------------------------------------------------
+# Every ```python block of README.md and docs/*.md runs as written, each in a fresh
+# namespace and an empty folder of its own. A block right after the marker
+# `<!-- skip-snippet: reason -->` is skipped with that reason (kept for blocks that need
+# something no test has, such as a running dask scheduler).
+# ---------------------------------------------------------------------------------------
+
+ROOT = DOCS.parent
+_BLOCK = re.compile(
+    r"(?:<!-- skip-snippet: (?P<skip>[^\n]*?) -->\n)?^```python\n(?P<code>.*?)^```$",
+    re.S | re.M,
+)
+SNIPPET_TIMEOUT = 120.0  # seconds per block; each takes a few
+
+
+def _snippets():
+    found = []
+    for page in [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]:
+        text = page.read_text()
+        for match in _BLOCK.finditer(text):
+            line = text.count("\n", 0, match.start("code"))
+            found.append((f"{page.relative_to(ROOT)}:{line}", match["code"], match["skip"]))
+    return found
+
+
+SNIPPETS = _snippets()
+
+
+def _watertight_subset(folder):
+    """The folder ``watertight_dev`` the snippets read: 3 of its classes, 5 meshes each
+    (linked from the shared data), so that a snippet takes seconds, not a minute."""
+    source = DATA_DIR / "watertight_dev"
+    if not source.is_dir():
+        pytest.skip(f"needs the Watertight data at {source} (set SKLEARN_MESHPH_DATA)")
+    for label in sorted(p for p in source.iterdir() if p.is_dir())[:3]:
+        (folder / "watertight_dev" / label.name).mkdir(parents=True)
+        for path in sorted(label.iterdir())[:5]:
+            (folder / "watertight_dev" / label.name / path.name).symlink_to(path)
+
+
+def _scans(folder):
+    """The folder ``scans`` of the point-cloud guide: 2 classes of 3 `.xyz` clouds."""
+    from sklearn_meshph import make_shapes, sample_point_cloud
+
+    meshes, y = make_shapes(
+        n_per_class=3, classes=("blob", "snake"), random_state=0, return_X_y=True
+    )
+    for i, (mesh, label) in enumerate(zip(meshes, y, strict=True)):
+        (folder / "scans" / str(label)).mkdir(parents=True, exist_ok=True)
+        cloud = sample_point_cloud(mesh, 1500, random_state=i)
+        np.savetxt(folder / "scans" / str(label) / f"{i}.xyz", cloud)
+
+
+# folder name a snippet reads (as a string literal) -> what puts it in the snippet's folder
+_FOLDERS = {"watertight_dev": _watertight_subset, "scans": _scans}
+
+# Runs the snippets in one interpreter (one import of the package), each in its own
+# folder; a snippet that has not ended after the timeout is killed with a traceback.
+_SNIPPET_RUNNER = """
+import faulthandler, json, os, sys, traceback
+import sklearn_meshph
+timeout = float(sys.argv[2])
+for name, code, folder in json.loads(sys.argv[1]):
+    os.chdir(folder)
+    print(json.dumps({"name": name, "started": True}), flush=True)
+    faulthandler.dump_traceback_later(timeout, exit=True)
+    try:
+        exec(compile(code, name, "exec"), {"__name__": "__main__"})
+        error = None
+    except BaseException:
+        error = traceback.format_exc()
+    faulthandler.cancel_dump_traceback_later()
+    print(json.dumps({"name": name, "error": error}), flush=True)
+"""
+
+
+def _run_snippets(jobs):
+    """``{name: error or None}`` for ``jobs`` (name, code, folder); after a snippet that
+    killed the interpreter (timeout, crash), the others run in a new one."""
+    errors = {}
+    while jobs:
+        run = subprocess.run(
+            [sys.executable, "-c", _SNIPPET_RUNNER, json.dumps(jobs), str(SNIPPET_TIMEOUT)],
+            capture_output=True,
+            text=True,
+            timeout=SNIPPET_TIMEOUT * len(jobs) + 60,
+        )
+        started = None
+        for line in run.stdout.splitlines():
+            if line.startswith('{"name"'):
+                record = json.loads(line)
+                if record.get("started"):
+                    started = record["name"]
+                else:
+                    errors[record["name"]], started = record["error"], None
+        if started is not None:
+            errors[started] = (
+                f"the interpreter died (exit {run.returncode}; a timeout after "
+                f"{SNIPPET_TIMEOUT:g} s prints the traceback):\n{run.stderr[-3000:]}"
+            )
+        jobs = [job for job in jobs if job[0] not in errors]
+        if started is None and jobs:  # died before reporting any of them
+            errors.update({job[0]: run.stderr[-3000:] or "not run" for job in jobs})
+            break
+    return errors
+
+
+@pytest.fixture(scope="module")
+def snippet_errors(tmp_path_factory):
+    """``{name: (error or None, skip reason or None)}`` for every snippet."""
+    jobs, skipped = [], {}
+    for name, code, marker in SNIPPETS:
+        if marker:
+            skipped[name] = f"marked not runnable: {marker}"
+            continue
+        folder = tmp_path_factory.mktemp("snippet")
+        try:
+            for needed, make in _FOLDERS.items():
+                if f'"{needed}"' in code:
+                    make(folder)
+        except pytest.skip.Exception as reason:
+            skipped[name] = str(reason)
+            continue
+        jobs.append((name, code, str(folder)))
+    return _run_snippets(jobs), skipped
+
+
+def test_the_pages_have_snippets():
+    assert len(SNIPPETS) >= 10
+    assert sum(marker is not None for _, _, marker in SNIPPETS) <= 3  # markers stay rare
+
+
+@pytest.mark.parametrize("name", [name for name, _, _ in SNIPPETS])
+def test_doc_snippet_runs(snippet_errors, name):
+    errors, skipped = snippet_errors
+    if name in skipped:
+        pytest.skip(skipped[name])
+    if errors[name] is not None:
+        pytest.fail(f"{name} failed:\n{errors[name]}", pytrace=False)
