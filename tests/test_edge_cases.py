@@ -26,9 +26,12 @@ import json
 import math
 import os
 import re
+import select
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 import traceback
 import warnings
 
@@ -224,13 +227,19 @@ _ALIASED = {
 }
 _CASES = {**_MALFORMED, **_ALIASED}
 
+# Seconds a child running one case (or one isolated test) may take before it is killed
+# and the case fails as a deadlock: each takes well under a second.
+_CHILD_TIMEOUT = 60.0
+
 # Imports the package once, then runs each case in a forked child and reports, per
 # case, what the child raised and how it exited: a crash in one case is that case's
-# failure only. Without fork, each case gets a fresh interpreter.
+# failure only, and so is a hang (the child is killed after the timeout). Without fork,
+# each case gets a fresh interpreter.
 _RUNNER = """
-import json, os, subprocess, sys
+import json, os, signal, subprocess, sys, time
 cases = json.loads(sys.argv[1])
 setup = sys.argv[2]
+timeout = float(sys.argv[3])
 CHILD = '''
 import json, sys
 name, code, setup = sys.argv[1:4]
@@ -256,13 +265,28 @@ if hasattr(os, "fork"):
             finally:
                 sys.stdout.flush()
                 os._exit(0)
-        _, status = os.waitpid(pid, 0)
-        print(json.dumps({"case": name, "exit": os.waitstatus_to_exitcode(status)}), flush=True)
+        deadline = time.monotonic() + timeout
+        while not (done := os.waitpid(pid, os.WNOHANG))[0] and time.monotonic() < deadline:
+            time.sleep(0.005)
+        if done[0]:
+            code = os.waitstatus_to_exitcode(done[1])
+        else:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            code = "timeout"
+        print(json.dumps({"case": name, "exit": code}), flush=True)
 else:
     for name, code in cases.items():
-        child = subprocess.run(
-            [sys.executable, "-c", CHILD, name, code, setup], capture_output=True, text=True
-        )
+        try:
+            child = subprocess.run(
+                [sys.executable, "-c", CHILD, name, code, setup],
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+            )
+        except subprocess.TimeoutExpired:
+            print(json.dumps({"case": name, "exit": "timeout"}), flush=True)
+            continue
         sys.stdout.write(child.stdout)
         print(json.dumps({"case": name, "exit": child.returncode}), flush=True)
 """
@@ -273,7 +297,14 @@ def malformed_outcomes():
     """For each case of ``_CASES``: its exit code and what it raised."""
     cases = {name: code for name, (code, _) in _CASES.items()}
     run = subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(_RUNNER), json.dumps(cases), _SETUP],
+        [
+            sys.executable,
+            "-c",
+            textwrap.dedent(_RUNNER),
+            json.dumps(cases),
+            _SETUP,
+            str(_CHILD_TIMEOUT),
+        ],
         capture_output=True,
         text=True,
         timeout=300,
@@ -293,6 +324,9 @@ def test_malformed_input_raises_value_error(malformed_outcomes, name):
     outcomes, stderr = malformed_outcomes
     _, pattern = _CASES[name]
     outcome = outcomes.get(name, {})
+    assert outcome.get("exit") != "timeout", (
+        f"{name}: the case did not end within {_CHILD_TIMEOUT:g} s (a deadlock?)"
+    )
     assert outcome.get("exit") == 0, (
         f"{name}: the process running the case died (exit code {outcome.get('exit')}; "
         f"negative: killed by that signal)\n{stderr}"
@@ -329,7 +363,8 @@ def _isolated(test):
 
     Before the fix, high orders and huge magnitudes could make the compiled solver read
     out of bounds (overflowed costs, inf - inf = NaN): that must fail the test, not end
-    the session.
+    the session; a child that hangs (a deadlock) is killed after ``_CHILD_TIMEOUT``
+    seconds and fails the test, rather than hanging the session.
     """
 
     @functools.wraps(test)
@@ -351,11 +386,20 @@ def _isolated(test):
                     report = report[os.write(write, report) :]
                 os._exit(status)
         os.close(write)
-        chunks = []
-        while chunk := os.read(read, 1 << 16):
+        chunks, deadline = [], time.monotonic() + _CHILD_TIMEOUT
+        hung = False
+        while True:  # read the report until the child closes the pipe, or the deadline
+            if not select.select([read], [], [], max(deadline - time.monotonic(), 0.0))[0]:
+                hung = True
+                os.kill(pid, signal.SIGKILL)
+                break
+            if not (chunk := os.read(read, 1 << 16)):
+                break
             chunks.append(chunk)
         os.close(read)
         code = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+        if hung:
+            pytest.fail(f"the test did not end within {_CHILD_TIMEOUT:g} s (a deadlock?)")
         if code < 0:
             pytest.fail(f"the test's process was killed by signal {-code} (a crash)")
         if code:
