@@ -11,6 +11,7 @@ persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
 beside them.
 """
 
+from . import vectorization
 from ._version import __version__ as __version__
 from .combine import CombinedDistance, FeatureDistance
 from .datasets import load_mesh_folder, make_shapes, sample_point_cloud
@@ -50,31 +51,11 @@ from .spectral import (
     graph_laplacian,
     laplacian_eigenfunctions,
 )
-from .vectorization import (
-    BettiCurve,
-    DiagramStatistics,
-    EntropyCurve,
-    PersistenceEntropy,
-    PersistenceImage,
-    PersistenceLandscape,
-    PersistenceScaleSpaceKernel,
-    PersistenceWeightedGaussianKernel,
-    Silhouette,
-    SlicedWassersteinKernel,
-)
+from .vectorization import *  # noqa: F403 (vectorization.__all__, listed below)
 
 __all__ = [
     "CacheWarning",
-    "BettiCurve",
-    "DiagramStatistics",
-    "EntropyCurve",
-    "PersistenceEntropy",
-    "PersistenceImage",
-    "PersistenceLandscape",
-    "PersistenceScaleSpaceKernel",
-    "PersistenceWeightedGaussianKernel",
-    "Silhouette",
-    "SlicedWassersteinKernel",
+    *vectorization.__all__,
     "CombinedDistance",
     "CleaningReport",
     "DiagramDistance",

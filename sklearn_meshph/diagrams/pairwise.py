@@ -10,21 +10,25 @@ from numbers import Integral, Real
 import numpy as np
 from joblib import delayed, effective_n_jobs
 from sklearn.base import ClassNamePrefixFeaturesOutMixin
-from sklearn.utils.validation import check_is_fitted
 
-from .._base import SampleTransformer
 from .._param_validation import Interval, Options, validate_params
 from .._progress import parallel, track
+from ._assignment import precedes
 from ._batch import SLICED, pack, pack_sliced, pair_distances
 from .distances import METRICS, kernel_metric
+from .estimator import DiagramTransformer
 from .validation import Packed, pack_samples
 
 __all__ = [
+    "SLICED",
     "PairwiseTransformer",
     "as_packed",
     "distance_matrix",
+    "pack_for_metric",
+    "pair_distances",
     "pair_matrix",
     "pairwise_diagram_distances",
+    "precedes",
 ]
 
 
@@ -150,6 +154,13 @@ def pairwise_diagram_distances(
     )
 
 
+def pack_for_metric(packed: Packed, code: int, n_directions: int = 10):
+    """Packed samples as :func:`pair_distances` reads them for the metric ``code``
+    (``SLICED``: each diagram's sorted projections on ``n_directions`` lines)."""
+    flat = pack(packed)
+    return pack_sliced(flat, n_directions) if code == SLICED else flat
+
+
 def distance_matrix(
     left, right, metric, order, internal_p, n_jobs, dtype, out, verbose=0, n_directions=10
 ):
@@ -160,11 +171,8 @@ def distance_matrix(
     right = None if right is None else as_packed(right)
     n_parts = left.n_diagrams
     n, m = len(left), len(left if right is None else right)
-    packed_left = pack(left)
-    packed_right = None if right is None else pack(right)
-    if code == SLICED:
-        packed_left = pack_sliced(packed_left, n_directions)
-        packed_right = None if right is None else pack_sliced(packed_right, n_directions)
+    packed_left = pack_for_metric(left, code, n_directions)
+    packed_right = None if right is None else pack_for_metric(right, code, n_directions)
     function = partial(
         pair_distances,
         n_parts=n_parts,
@@ -236,7 +244,7 @@ def pair_matrix(
     return matrix
 
 
-class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
+class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, DiagramTransformer):
     """Base of the transformers whose output is a matrix to their fitted samples: the
     distances and the kernels between diagrams.
 
@@ -245,55 +253,14 @@ class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
     ``X``, each unordered pair computed once. The output's columns are named after the
     fitted samples, ``<class name>0``, ``<class name>1``... Subclasses define
     ``_fit(X)`` (store the samples; return the symmetric matrix if fitting computed it,
-    else None), ``_validate(X)`` (samples checked against the fitted ones) and
-    ``_matrix(left, right)`` (``right=None``: the symmetric matrix of ``left``).
+    else None), ``_validate(X)`` and ``_matrix(left, right)`` (``right=None``: the
+    symmetric matrix of ``left``).
     """
 
-    _sample_kind = "diagrams"
-    _requires_fit = True
+    def _output(self, samples):
+        return self._matrix(samples, self.diagrams_)
 
-    def fit(self, X, y=None):
-        """Store the samples to compare with.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        self._fit(X)
-        return self
-
-    def transform(self, X):
-        """The matrix between each sample of ``X`` and each fitted sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (len(X), n_fitted)
-        """
-        check_is_fitted(self, "diagrams_")
-        return self._matrix(self._validate(X), self.diagrams_)
-
-    def fit_transform(self, X, y=None):
-        """Fit, and return the symmetric matrix of ``X``, each pair computed once.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        ndarray of shape (len(X), len(X))
-        """
-        matrix = self._fit(X)
+    def _fit_output(self, matrix):
         return self._matrix(self.diagrams_, None) if matrix is None else matrix
 
     @property

@@ -5,14 +5,13 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import ClassNamePrefixFeaturesOutMixin
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list, median_scale
 from .._param_validation import Interval, Options
 from .distances import METRICS, kernel_metric
-from .pairwise import distance_matrix
+from .pairwise import PairwiseTransformer, distance_matrix
 from .validation import check_samples
 
 __all__ = ["DiagramDistance"]
@@ -21,7 +20,7 @@ __all__ = ["DiagramDistance"]
 _DISTANCE_PARAMS = ("metric", "order", "internal_p", "normalization", "n_directions")
 
 
-class DiagramDistance(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
+class DiagramDistance(PairwiseTransformer):
     """Bottleneck, Wasserstein or sliced Wasserstein distances to the fitted persistence
     diagrams.
 
@@ -150,26 +149,10 @@ class DiagramDistance(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
         self.normalization = normalization
         self.n_directions = n_directions
 
-    def fit(self, X, y=None):
-        """Store the diagrams to measure distances to (and, with
-        ``normalization="median"``, learn the scale of each position).
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        self._fit(X)
-        return self
-
     def _fit(self, X):
         """Fit; the fitted samples' symmetric matrix when it was computed, else None."""
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
-        super().fit(X)
+        SampleTransformer.fit(self, X)
         self.diagrams_ = check_samples(X)
         self.n_diagrams_ = len(self.diagrams_[0])
         # Refuse settings the kernels cannot carry now, not at transform time.
@@ -181,11 +164,6 @@ class DiagramDistance(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
         parts = self._per_position(self.diagrams_, None)
         self.scales_ = np.array([median_scale(part) for part in parts])
         return self._combine(parts)
-
-    @property
-    def _n_features_out(self):
-        """The number of output columns: one per fitted sample."""
-        return len(self.diagrams_)
 
     def _kwargs(self, dtype=None):
         fitted = self.distance_params_
@@ -225,7 +203,7 @@ class DiagramDistance(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
             total = sum(part**q for part in scaled) ** (1.0 / q)
         return total.astype(self.dtype, copy=False)
 
-    def _distances(self, left, right):
+    def _matrix(self, left, right):
         if self.distance_params_["normalization"] == "none":
             return distance_matrix(left, right, **self._kwargs())
         return self._combine(self._per_position(left, right))
@@ -245,34 +223,6 @@ class DiagramDistance(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
                 "fit again"
             )
 
-    def transform(self, X):
-        """Distances from each sample of ``X`` to each fitted sample.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (len(X), n_fitted)
-            A DataFrame after ``set_output(transform="pandas")``.
-        """
+    def _validate(self, X):
         self._check_fitted()
-        samples = check_samples(X, n_diagrams=self.n_diagrams_)
-        return self._distances(samples, self.diagrams_)
-
-    def fit_transform(self, X, y=None):
-        """Fit and return the symmetric distance matrix, each pair computed once.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-            Stored as by :meth:`fit`, and compared with each other.
-        y : ignored
-
-        Returns
-        -------
-        ndarray of shape (len(X), len(X))
-        """
-        matrix = self._fit(X)
-        return self._distances(self.diagrams_, None) if matrix is None else matrix
+        return check_samples(X, n_diagrams=self.n_diagrams_)

@@ -19,6 +19,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer, as_sample_list
 from .._param_validation import Interval, Options
 from .._progress import map_samples, sample_blocks
+from ..diagrams.estimator import DiagramTransformer
 from ..diagrams.validation import Packed, pack_samples
 
 __all__ = [
@@ -26,8 +27,8 @@ __all__ = [
     "COMMON_CONSTRAINTS",
     "COMMON_PARAMETERS",
     "INFINITE_POLICIES",
-    "DiagramTransformer",
     "PackedVectorizer",
+    "PolicyTransformer",
     "apply_infinite",
     "check_finite_output",
     "point_weights",
@@ -151,18 +152,14 @@ def check_finite_output(values: np.ndarray, what: str) -> np.ndarray:
     return values
 
 
-class DiagramTransformer(SampleTransformer):
-    """Base of the transformers whose samples are persistence diagrams (one ``(n, 2)``
-    array or a tuple of them, as :class:`LowerStarPersistence` returns).
+class PolicyTransformer(DiagramTransformer):
+    """Base of the vectorizers and kernels: samples validated and packed, and the
+    ``infinite`` policy applied.
 
-    ``_fit_packed(X)`` validates the samples and applies the ``infinite`` policy
-    (learning, for ``"clip"``, where to clip each position); ``_checked_packed(X)``
-    does the same at transform time with the fitted values. Both return
-    :class:`Packed` samples.
+    ``_fit_packed(X)`` validates the samples and applies the policy (learning, for
+    ``"clip"``, where to clip each position); ``_validate(X)`` does the same at
+    transform time with the fitted values. Both return :class:`Packed` samples.
     """
-
-    _sample_kind = "diagrams"
-    _requires_fit = True
 
     def _infinite_policy(self, warn: bool = False) -> str:
         """``infinite``, or ``essential`` when it is set (with a FutureWarning if
@@ -190,7 +187,7 @@ class DiagramTransformer(SampleTransformer):
         )
         return apply_infinite(packed, self._infinite_policy(warn=True), self.clip_values_)
 
-    def _checked_packed(self, X) -> Packed:
+    def _validate(self, X) -> Packed:
         """Validate ``X`` against the fitted data and apply the ``infinite`` policy."""
         check_is_fitted(self, "n_diagrams_")
         packed = _checked_magnitude(pack_samples(X, n_diagrams=self.n_diagrams_))
@@ -257,56 +254,23 @@ def apply_infinite(packed: Packed, policy: str, clip_values=None) -> Packed:
     return Packed(np.ascontiguousarray(packed.points[keep]), offsets, packed.n_diagrams)
 
 
-class PackedVectorizer(DiagramTransformer):
+class PackedVectorizer(PolicyTransformer):
     """Base of the vectorizers: samples packed once, ``_fit_positions(packed)`` learns
     per position, ``_compute(k, packed, starts, stops)`` gives the block of columns of
-    position ``k`` for the diagrams ``starts:stops`` of ``packed.points``."""
+    position ``k`` for the diagrams ``starts:stops`` of ``packed.points``; a sample's
+    features are the columns of each of its diagrams, position after position."""
 
-    _output = "features"
+    _output_name = "features"
 
-    def fit(self, X, y=None):
-        """Learn what the vectorization needs from the diagrams of each position.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        self
-        """
-        self._fit_positions(self._fit_packed(X))
-        return self
-
-    def transform(self, X):
-        """The feature vector of each sample: the columns of each of its diagrams,
-        position after position.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-
-        Returns
-        -------
-        ndarray of shape (n_samples, n_features)
-        """
-        return self._rows(self._checked_packed(X))
-
-    def fit_transform(self, X, y=None):
-        """Fit and transform ``X``, validating it once.
-
-        Parameters
-        ----------
-        X : sequence of diagrams or of tuples of diagrams
-        y : ignored
-
-        Returns
-        -------
-        ndarray of shape (n_samples, n_features)
-        """
+    def _fit(self, X) -> Packed:
         packed = self._fit_packed(X)
         self._fit_positions(packed)
+        return packed
+
+    def _fit_output(self, packed: Packed) -> np.ndarray:
+        return self._rows(packed)
+
+    def _output(self, packed: Packed) -> np.ndarray:
         return self._rows(packed)
 
     def _rows(self, packed: Packed) -> np.ndarray:
@@ -318,7 +282,9 @@ class PackedVectorizer(DiagramTransformer):
         else:
             parts = (packed.block(a, b) for a, b in blocks)
             rows = map_samples(self._block_rows, parts, n_jobs=self.n_jobs, prefer="threads")
-        return check_finite_output(np.vstack(rows), self._output).astype(self.dtype, copy=False)
+        return check_finite_output(np.vstack(rows), self._output_name).astype(
+            self.dtype, copy=False
+        )
 
     def _block_rows(self, packed: Packed) -> np.ndarray:
         columns = [self._compute(k, packed, *packed.position(k)) for k in range(packed.n_diagrams)]

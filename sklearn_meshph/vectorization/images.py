@@ -86,7 +86,7 @@ class PersistenceImage(PackedVectorizer):
     (1, 6)
     """
 
-    _output = "images"
+    _output_name = "images"
 
     _parameter_constraints: dict = {
         "bandwidth": BANDWIDTH,

@@ -17,10 +17,15 @@ import numba
 import numpy as np
 
 from .._param_validation import Interval
-from ..diagrams._assignment import precedes
-from ..diagrams._batch import pack, pack_sliced
-from ..diagrams._sliced import sliced_pairs
-from ..diagrams.pairwise import PairwiseTransformer, as_packed, pair_matrix
+from ..diagrams.pairwise import (
+    SLICED,
+    PairwiseTransformer,
+    as_packed,
+    pack_for_metric,
+    pair_distances,
+    pair_matrix,
+    precedes,
+)
 from ._base import (
     BANDWIDTH,
     COMMON_ATTRIBUTES,
@@ -28,7 +33,7 @@ from ._base import (
     COMMON_PARAMETERS,
     WEIGHT_CONSTRAINTS,
     WEIGHT_PARAMETER,
-    DiagramTransformer,
+    PolicyTransformer,
     check_finite_output,
     point_weights,
 )
@@ -40,7 +45,7 @@ __all__ = [
 ]
 
 
-class _DiagramKernel(DiagramTransformer, PairwiseTransformer):
+class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
     """What the three kernels share: ``fit`` stores the diagrams after the ``infinite``
     policy, ``transform`` the kernel with them, ``fit_transform`` the symmetric matrix,
     each pair computed once (:class:`PairwiseTransformer`), on :class:`Packed` samples.
@@ -52,9 +57,6 @@ class _DiagramKernel(DiagramTransformer, PairwiseTransformer):
 
     def _fit(self, X):
         self.diagrams_ = self._fit_packed(X).samples()
-
-    def _validate(self, X):
-        return self._checked_packed(X)
 
     def _matrix(self, left, right):
         left = as_packed(left)
@@ -86,7 +88,7 @@ _BANDWIDTH = """bandwidth : float, default=1.0
 
 def _sliced_kernel(left, right, rows, cols, n_parts, bandwidth):
     """``exp(-SW / (2 bandwidth^2))``, SW summed over the parts."""
-    distances = sliced_pairs(left, right, rows, cols, n_parts)
+    distances = pair_distances(left, right, rows, cols, n_parts, SLICED)
     return np.exp(-distances / (2.0 * bandwidth * bandwidth))
 
 
@@ -175,7 +177,7 @@ class SlicedWassersteinKernel(_DiagramKernel):
         self.essential = essential
 
     def _pack(self, packed):
-        return pack_sliced(pack(packed), self.n_directions)
+        return pack_for_metric(packed, SLICED, self.n_directions)
 
     def _pairs(self, n_parts):
         return partial(_sliced_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
