@@ -30,6 +30,7 @@ __all__ = [
     "PackedVectorizer",
     "PolicyTransformer",
     "apply_infinite",
+    "common_sections",
     "check_finite_output",
     "point_weights",
     "resolve_range",
@@ -74,6 +75,14 @@ COMMON_ATTRIBUTES = """n_diagrams_ : int
         Diagrams per sample.
     clip_values_ : ndarray of shape (n_diagrams,)
         Where ``infinite="clip"`` clips the deaths of each position."""
+
+
+def common_sections(attributes: str = "") -> str:
+    """The end of a class docstring's Parameters section (the common parameters) and
+    its Attributes section (``attributes``, then the common ones), indented for it."""
+    first = f"{attributes}\n    " if attributes else ""
+    return f"{COMMON_PARAMETERS}\n\n    Attributes\n    ----------\n    {first}{COMMON_ATTRIBUTES}"
+
 
 #: The point-weight convention of the images and the kernels.
 WEIGHT_PARAMETER = """weight : {"constant", "persistence"} or callable, default="constant"

@@ -9,10 +9,9 @@ import numpy as np
 
 from .._param_validation import Interval
 from ._base import (
-    COMMON_ATTRIBUTES,
     COMMON_CONSTRAINTS,
-    COMMON_PARAMETERS,
     PackedVectorizer,
+    common_sections,
     resolve_range,
 )
 from ._compiled import betti_curves, entropy_curves, landscapes, silhouettes
@@ -56,11 +55,10 @@ _GRID_PARAMETERS = f"""resolution : int, default=100
         Whether a learned end is itself a grid point (where the function is 0 or
         trivial); by default the grid is spread over ``resolution + 1`` (or ``+ 2``)
         points and the learned ends left out, as gudhi does.
-    {COMMON_PARAMETERS}"""
-
-_GRID_ATTRIBUTES = f"""grids_ : list of ndarray
-        The grid of each diagram position.
-    {COMMON_ATTRIBUTES}"""
+    {
+    common_sections('''grids_ : list of ndarray
+        The grid of each diagram position.''')
+}"""
 
 
 class _GridFunction(PackedVectorizer):
@@ -68,6 +66,22 @@ class _GridFunction(PackedVectorizer):
 
     _parameter_constraints: dict = dict(_GRID_CONSTRAINTS)
     _feature = "value"
+
+    def __init__(
+        self,
+        resolution=100,
+        sample_range=None,
+        keep_endpoints=False,
+        infinite="drop",
+        n_jobs=None,
+        dtype="float64",
+        essential="deprecated",
+    ):
+        self.resolution = resolution
+        self.sample_range = sample_range
+        self.keep_endpoints = keep_endpoints
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
+        self.essential = essential
 
     def _features_per_position(self) -> int:
         return self.resolution
@@ -113,10 +127,6 @@ class PersistenceLandscape(_GridFunction):
         Landscapes per diagram.
     {_GRID_PARAMETERS}
 
-    Attributes
-    ----------
-    {_GRID_ATTRIBUTES}
-
     Notes
     -----
     Equals ``gudhi.representations.Landscape(num_landscapes, resolution, sample_range,
@@ -149,13 +159,9 @@ class PersistenceLandscape(_GridFunction):
         essential="deprecated",
     ):
         self.n_landscapes = n_landscapes
-        self.resolution = resolution
-        self.sample_range = sample_range
-        self.keep_endpoints = keep_endpoints
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
-        self.essential = essential
+        super().__init__(
+            resolution, sample_range, keep_endpoints, infinite, n_jobs, dtype, essential
+        )
 
     def _curves(self, points, starts, stops, grid):
         return landscapes(points, starts, stops, grid, self.n_landscapes)
@@ -181,10 +187,6 @@ class Silhouette(_GridFunction):
         Exponent of the persistence in the weights: 0 weighs every point alike, larger
         values favour the persistent points.
     {_GRID_PARAMETERS}
-
-    Attributes
-    ----------
-    {_GRID_ATTRIBUTES}
 
     Notes
     -----
@@ -218,13 +220,9 @@ class Silhouette(_GridFunction):
         essential="deprecated",
     ):
         self.power = power
-        self.resolution = resolution
-        self.sample_range = sample_range
-        self.keep_endpoints = keep_endpoints
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
-        self.essential = essential
+        super().__init__(
+            resolution, sample_range, keep_endpoints, infinite, n_jobs, dtype, essential
+        )
 
     def _curves(self, points, starts, stops, grid):
         weights = (points[:, 1] - points[:, 0]) ** float(self.power)
@@ -242,10 +240,6 @@ class BettiCurve(_GridFunction):
     ----------
     {_GRID_PARAMETERS}
 
-    Attributes
-    ----------
-    {_GRID_ATTRIBUTES}
-
     Notes
     -----
     Equals ``gudhi.representations.BettiCurve(resolution, sample_range,
@@ -260,24 +254,6 @@ class BettiCurve(_GridFunction):
     """
 
     _feature = "betti"
-
-    def __init__(
-        self,
-        resolution=100,
-        sample_range=None,
-        keep_endpoints=False,
-        infinite="drop",
-        n_jobs=None,
-        dtype="float64",
-        essential="deprecated",
-    ):
-        self.resolution = resolution
-        self.sample_range = sample_range
-        self.keep_endpoints = keep_endpoints
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
-        self.essential = essential
 
     def _curves(self, points, starts, stops, grid):
         return betti_curves(points, starts, stops, grid)
@@ -295,10 +271,6 @@ class EntropyCurve(_GridFunction):
     normalized : bool, default=True
         Divide each curve by the sum of its values (a curve of zeros stays zero).
     {_GRID_PARAMETERS}
-
-    Attributes
-    ----------
-    {_GRID_ATTRIBUTES}
 
     Notes
     -----
@@ -329,13 +301,9 @@ class EntropyCurve(_GridFunction):
         essential="deprecated",
     ):
         self.normalized = normalized
-        self.resolution = resolution
-        self.sample_range = sample_range
-        self.keep_endpoints = keep_endpoints
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
-        self.essential = essential
+        super().__init__(
+            resolution, sample_range, keep_endpoints, infinite, n_jobs, dtype, essential
+        )
 
     def _curves(self, points, starts, stops, grid):
         curves = entropy_curves(points, starts, stops, grid)

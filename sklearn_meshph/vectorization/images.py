@@ -9,18 +9,22 @@ import numpy as np
 from .._param_validation import Options
 from ._base import (
     BANDWIDTH,
-    COMMON_ATTRIBUTES,
     COMMON_CONSTRAINTS,
-    COMMON_PARAMETERS,
     WEIGHT_CONSTRAINTS,
     WEIGHT_PARAMETER,
     PackedVectorizer,
+    common_sections,
     point_weights,
     resolve_range,
 )
 from ._compiled import images
 
 __all__ = ["PersistenceImage"]
+
+_SECTIONS = common_sections(
+    """im_ranges_ : ndarray of shape (n_diagrams, 4)
+        The grid's range of each diagram position."""
+)
 
 
 class PersistenceImage(PackedVectorizer):
@@ -52,13 +56,7 @@ class PersistenceImage(PackedVectorizer):
         ``resolution`` pixels per axis (persim's convention; an image then sums to the
         total weight that falls inside the range).
     {WEIGHT_PARAMETER}
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    im_ranges_ : ndarray of shape (n_diagrams, 4)
-        The grid's range of each diagram position.
-    {COMMON_ATTRIBUTES}
+    {_SECTIONS}
 
     See Also
     --------
@@ -116,9 +114,7 @@ class PersistenceImage(PackedVectorizer):
         self.sampling = sampling
         self.weight = weight
         self.power = power
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _check_params(self) -> None:

@@ -28,13 +28,12 @@ from ..diagrams.pairwise import (
 )
 from ._base import (
     BANDWIDTH,
-    COMMON_ATTRIBUTES,
     COMMON_CONSTRAINTS,
-    COMMON_PARAMETERS,
     WEIGHT_CONSTRAINTS,
     WEIGHT_PARAMETER,
     PolicyTransformer,
     check_finite_output,
+    common_sections,
     point_weights,
 )
 
@@ -77,9 +76,10 @@ class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
 
 _KERNEL_CONSTRAINTS: dict = {"bandwidth": BANDWIDTH, **COMMON_CONSTRAINTS}
 
-_KERNEL_ATTRIBUTES = f"""diagrams_ : list of tuple of ndarray
-        The fitted samples' finite diagrams, after the ``infinite`` policy.
-    {COMMON_ATTRIBUTES}"""
+_SECTIONS = common_sections(
+    """diagrams_ : list of tuple of ndarray
+        The fitted samples' finite diagrams, after the ``infinite`` policy."""
+)
 
 _BANDWIDTH = """bandwidth : float, default=1.0
         Standard deviation ``s`` of the Gaussians, in the diagrams' units: neither so
@@ -113,11 +113,7 @@ class SlicedWassersteinKernel(_DiagramKernel):
     n_directions : int, default=10
         Number of lines: the angles ``-pi/2 + k pi / (n_directions + 1)``,
         ``k = 0, ..., n_directions - 1`` (see Notes for gudhi's convention).
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    {_KERNEL_ATTRIBUTES}
+    {_SECTIONS}
 
     See Also
     --------
@@ -146,13 +142,15 @@ class SlicedWassersteinKernel(_DiagramKernel):
 
     Examples
     --------
+    Two samples of two diagrams each (say H0 and H1):
+
     >>> import numpy as np
     >>> from sklearn_meshph import SlicedWassersteinKernel
-    >>> diagrams = [np.array([[0.0, 1.0]]), np.array([[0.0, 1.5]]), np.empty((0, 2))]
-    >>> SlicedWassersteinKernel().fit_transform(diagrams).round(3)
-    array([[1.   , 0.808, 0.794],
-           [0.808, 1.   , 0.707],
-           [0.794, 0.707, 1.   ]])
+    >>> h0, h1 = np.array([[0.0, 1.0]]), np.array([[0.5, 2.0]])
+    >>> pairs = [(h0, h1), (np.array([[0.0, 1.5]]), np.empty((0, 2)))]
+    >>> SlicedWassersteinKernel(bandwidth=2.0).fit_transform(pairs).round(3)
+    array([[1.  , 0.87],
+           [0.87, 1.  ]])
     """
 
     _parameter_constraints: dict = {
@@ -171,9 +169,7 @@ class SlicedWassersteinKernel(_DiagramKernel):
     ):
         self.bandwidth = bandwidth
         self.n_directions = n_directions
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _pack(self, packed):
@@ -244,11 +240,7 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
     Parameters
     ----------
     {_BANDWIDTH}
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    {_KERNEL_ATTRIBUTES}
+    {_SECTIONS}
 
     See Also
     --------
@@ -292,9 +284,7 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
         self, bandwidth=1.0, infinite="drop", n_jobs=None, dtype="float64", essential="deprecated"
     ):
         self.bandwidth = bandwidth
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _pack(self, packed):
@@ -360,11 +350,7 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
     ----------
     {_BANDWIDTH}
     {WEIGHT_PARAMETER}
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    {_KERNEL_ATTRIBUTES}
+    {_SECTIONS}
 
     See Also
     --------
@@ -384,20 +370,21 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
     al. also apply a Gaussian kernel on top of it (``exp(-|E(F) - E(G)|^2 / (2 tau^2))``,
     with ``|E(F) - E(G)|^2 = k(F, F) + k(G, G) - 2 k(F, G)``).
 
-    A tuple of diagrams is compared as the typed disjoint union of its diagrams (each
-    on its own copy of the plane): the kernel is the sum of the per-position kernels.
-    Weights are computed once per diagram; a pair costs ``n m`` exponentials.
+    Tuples of diagrams: the sum of the per-position kernels, as for
+    :class:`PersistenceScaleSpaceKernel`. Weights are computed once per diagram; a pair
+    costs ``n m`` exponentials.
 
     Examples
     --------
+    Kernel values of a new diagram with two fitted ones, points weighted by their
+    squared persistence:
+
     >>> import numpy as np
     >>> from sklearn_meshph import PersistenceWeightedGaussianKernel
-    >>> diagrams = [np.array([[0.0, 1.0]]), np.array([[0.0, 1.5]]), np.empty((0, 2))]
-    >>> kernel = PersistenceWeightedGaussianKernel(weight="persistence")
-    >>> kernel.fit_transform(diagrams).round(3)
-    array([[0.399, 0.528, 0.   ],
-           [0.528, 0.898, 0.   ],
-           [0.   , 0.   , 0.   ]])
+    >>> fitted = [np.array([[0.0, 2.0], [1.0, 1.5]]), np.array([[0.5, 2.5]])]
+    >>> kernel = PersistenceWeightedGaussianKernel(weight="persistence", power=2)
+    >>> kernel.fit(fitted).transform([np.array([[0.0, 2.0]])]).round(3)
+    array([[6.597, 4.971]])
     """
 
     _parameter_constraints: dict = {**_KERNEL_CONSTRAINTS, **WEIGHT_CONSTRAINTS}
@@ -415,9 +402,7 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
         self.bandwidth = bandwidth
         self.weight = weight
         self.power = power
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _pack(self, packed):

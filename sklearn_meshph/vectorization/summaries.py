@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import COMMON_ATTRIBUTES, COMMON_CONSTRAINTS, COMMON_PARAMETERS, PackedVectorizer
+from ._base import COMMON_CONSTRAINTS, PackedVectorizer, common_sections
 from ._compiled import entropies, statistics
 
 __all__ = ["DiagramStatistics", "PersistenceEntropy"]
+
+_SECTIONS = common_sections()
 
 
 class _Summary(PackedVectorizer):
@@ -42,11 +44,7 @@ class PersistenceEntropy(_Summary):
     normalized : bool, default=False
         Divide by ``log n`` (``n`` points; 0 for ``n <= 1``), so that the value lies in
         [0, 1] whatever the number of points.
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    {COMMON_ATTRIBUTES}
+    {_SECTIONS}
 
     See Also
     --------
@@ -76,9 +74,7 @@ class PersistenceEntropy(_Summary):
         essential="deprecated",
     ):
         self.normalized = normalized
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _names(self):
@@ -99,11 +95,7 @@ class DiagramStatistics(_Summary):
     ----------
     quantiles : tuple of float, default=(0.1, 0.25, 0.5, 0.75, 0.9)
         Quantiles of the persistence (linear interpolation).
-    {COMMON_PARAMETERS}
-
-    Attributes
-    ----------
-    {COMMON_ATTRIBUTES}
+    {_SECTIONS}
 
     Examples
     --------
@@ -127,9 +119,7 @@ class DiagramStatistics(_Summary):
         essential="deprecated",
     ):
         self.quantiles = quantiles
-        self.infinite = infinite
-        self.n_jobs = n_jobs
-        self.dtype = dtype
+        self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _check_params(self) -> None:
