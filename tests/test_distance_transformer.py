@@ -129,7 +129,11 @@ def test_identical_on_a_dask_cluster():
     np.testing.assert_array_equal(remote, local)
     for a, b in zip(fields, local_fields, strict=True):
         np.testing.assert_array_equal(a.values, b.values)
-    assert len(remote_diagrams) == len(meshes)
+    local_diagrams = LowerStarPersistence().fit_transform(local_fields)
+    assert len(remote_diagrams) == len(local_diagrams) == len(meshes)
+    for a, b in zip(remote_diagrams, local_diagrams, strict=True):
+        for part_a, part_b in zip(a, b, strict=True):
+            np.testing.assert_array_equal(part_a, part_b)
 
 
 @pytest.mark.parametrize("backend", ["multiprocessing", "loky", "threading"])

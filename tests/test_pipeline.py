@@ -16,6 +16,7 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    ScalarField,
     make_mesh_distance,
     make_shapes,
 )
@@ -67,7 +68,16 @@ def test_grid_search_over_eigen_index_solves_each_mesh_once(shapes, tmp_path):
     )
     grid.fit(meshes, y)
     assert sum(1 for _ in tmp_path.rglob("header.json")) == len(meshes)
-    assert grid.best_params_["laplacianeigentransformer__eigen_index"] in range(1, 6)
+    # The scores are those of each index computed without the cache, and the best is theirs.
+    fields = LaplacianEigenTransformer(eigen_index=(1, 2, 3, 4, 5)).fit_transform(meshes)
+    knn = KNeighborsClassifier(n_neighbors=1, metric="precomputed")
+    expected = []
+    for k in range(5):
+        one = [ScalarField(f.vertices, f.faces, f.values[:, k]) for f in fields]
+        matrix = DiagramDistance().fit_transform(LowerStarPersistence().fit_transform(one))
+        expected.append(cross_val_score(knn, matrix, y, cv=StratifiedKFold(3)).mean())
+    np.testing.assert_allclose(grid.cv_results_["mean_test_score"], expected)
+    assert grid.best_params_["laplacianeigentransformer__eigen_index"] == 1 + np.argmax(expected)
 
 
 def test_tsne_on_the_distance_matrix(shapes):

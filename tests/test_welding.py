@@ -11,6 +11,7 @@ from conftest import irregular_ellipsoid
 from sklearn_meshph import (
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    MeshCleaningWarning,
     clean_mesh,
     laplacian_eigenfunctions,
     weld_vertices,
@@ -182,7 +183,7 @@ def test_field_pickles(ellipsoid):
         np.concatenate([vertices, extra]),
         np.concatenate([faces, [[len(vertices) + i for i in range(3)]]]),
     )
-    with pytest.warns(UserWarning):
+    with pytest.warns(MeshCleaningWarning, match="^sample 0: cleaning dropped .*1 other comp"):
         field = LaplacianEigenTransformer().fit_transform([mesh])[0]
     copy = pickle.loads(pickle.dumps(field))
     np.testing.assert_array_equal(copy.input_to_kept, field.input_to_kept)
