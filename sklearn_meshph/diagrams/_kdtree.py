@@ -104,68 +104,115 @@ def node_maxima(tree, weights):
     return out
 
 
-@numba.njit(cache=True)
-def nearest(tree, points, x, y, k, internal_p, best_g, best_j, stack):
-    """The ``k`` points nearest to ``(x, y)`` in the L-``internal_p`` metric, by
-    increasing distance (ties in the order the tree meets them) in ``best_g`` and
-    ``best_j``; returns how many (fewer when there are fewer points)."""
+@numba.njit(cache=True, inline="always")
+def depth_first(tree, stack, skip, first_child, leaf, state):
+    """Visit the leaves of ``tree`` depth-first from the root.
+
+    A node for which ``skip(box, node, state)`` holds is passed over with everything
+    below it; of an inner node's children ``left`` and ``left + 1``, child
+    ``left + first_child(box, left, state)`` is visited first; ``leaf(order, s, e,
+    state)`` sees the points ``order[s:e]`` of each leaf reached. ``state`` is the
+    caller's (a tuple): what the three functions read and write. Inlined into each
+    caller, which compiles it with its own functions.
+    """
     order, start, stop, left, box = tree
-    count = 0
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         node = stack[top]
-        if count == k and box_gap(box, node, x, y) >= best_g[k - 1]:
+        if skip(box, node, state):
             continue
         if left[node] >= 0:
-            near, far = left[node], left[node] + 1
-            if box_gap(box, far, x, y) < box_gap(box, near, x, y):
-                near, far = far, near
-            stack[top] = far
-            stack[top + 1] = near
+            first = first_child(box, left[node], state)
+            stack[top] = left[node] + 1 - first
+            stack[top + 1] = left[node] + first
             top += 2
             continue
-        for r in range(start[node], stop[node]):
-            j = order[r]
-            g = ground(abs(x - points[j, 0]), abs(y - points[j, 1]), internal_p)
-            if count == k and g >= best_g[k - 1]:
-                continue
-            pos = count if count < k else k - 1
-            while pos > 0 and best_g[pos - 1] > g:
-                best_g[pos] = best_g[pos - 1]
-                best_j[pos] = best_j[pos - 1]
-                pos -= 1
-            best_g[pos] = g
-            best_j[pos] = j
-            count = min(count + 1, k)
-    return count
+        leaf(order, start[node], stop[node], state)
+
+
+@numba.njit(cache=True)
+def _beyond_the_kth(box, node, state):
+    """``nearest``: the node cannot hold a point nearer than the k-th found so far."""
+    _, x, y, k, _, best_g, _, count = state
+    return count[0] == k and box_gap(box, node, x, y) >= best_g[k - 1]
+
+
+@numba.njit(cache=True)
+def _nearer_child(box, first, state):
+    """``nearest``: the child whose box is nearer first (the first one on a tie)."""
+    x, y = state[1], state[2]
+    return 1 if box_gap(box, first + 1, x, y) < box_gap(box, first, x, y) else 0
+
+
+@numba.njit(cache=True)
+def _keep_nearest(order, s, e, state):
+    """``nearest``: insert the leaf's points among the k nearest found so far."""
+    points, x, y, k, internal_p, best_g, best_j, count = state
+    for r in range(s, e):
+        j = order[r]
+        g = ground(abs(x - points[j, 0]), abs(y - points[j, 1]), internal_p)
+        if count[0] == k and g >= best_g[k - 1]:
+            continue
+        pos = count[0] if count[0] < k else k - 1
+        while pos > 0 and best_g[pos - 1] > g:
+            best_g[pos] = best_g[pos - 1]
+            best_j[pos] = best_j[pos - 1]
+            pos -= 1
+        best_g[pos] = g
+        best_j[pos] = j
+        count[0] = min(count[0] + 1, k)
+
+
+@numba.njit(cache=True)
+def nearest(tree, points, x, y, k, internal_p, best_g, best_j, stack):
+    """The ``k`` points nearest to ``(x, y)`` in the L-``internal_p`` metric, by
+    increasing distance (ties in the order the tree meets them) in ``best_g`` and
+    ``best_j``; returns how many (fewer when there are fewer points)."""
+    count = np.zeros(1, np.int64)
+    state = (points, x, y, k, internal_p, best_g, best_j, count)
+    depth_first(tree, stack, _beyond_the_kth, _nearer_child, _keep_nearest, state)
+    return count[0]
+
+
+@numba.njit(cache=True)
+def _beyond_reach(box, node, state):
+    """``within``: the node's box is farther than the reach."""
+    return box_gap(box, node, state[1], state[2]) > state[3]
+
+
+@numba.njit(cache=True)
+def left_first(box, first, state):
+    """Children in the order of the tree: the left one first."""
+    return 0
+
+
+@numba.njit(cache=True)
+def right_first(box, first, state):
+    """Children in reverse order of the tree: the right one first."""
+    return 1
+
+
+@numba.njit(cache=True)
+def _keep_within(order, s, e, state):
+    """``within``: append the leaf's points within the reach."""
+    points, x, y, reach, out, count = state
+    for r in range(s, e):
+        j = order[r]
+        if max(abs(x - points[j, 0]), abs(y - points[j, 1])) <= reach:
+            out[count[0]] = j
+            count[0] += 1
 
 
 @numba.njit(cache=True)
 def within(tree, points, x, y, reach, out, stack):
     """The points at L-infinity distance at most ``reach`` from ``(x, y)``, in tree
     order, written to ``out``; returns how many."""
-    order, start, stop, left, box = tree
-    count = 0
-    stack[0] = 0
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if box_gap(box, node, x, y) > reach:
-            continue
-        if left[node] >= 0:
-            stack[top] = left[node] + 1
-            stack[top + 1] = left[node]
-            top += 2
-            continue
-        for r in range(start[node], stop[node]):
-            j = order[r]
-            if max(abs(x - points[j, 0]), abs(y - points[j, 1])) <= reach:
-                out[count] = j
-                count += 1
-    return count
+    count = np.zeros(1, np.int64)
+    state = (points, x, y, reach, out, count)
+    depth_first(tree, stack, _beyond_reach, left_first, _keep_within, state)
+    return count[0]
 
 
 # Depth-first stacks never hold more than two nodes per level of a tree.

@@ -10,7 +10,7 @@ import numpy as np
 from ._assignment import reserve
 from ._assignment_solver import solve
 from ._costs import cost, keep_pair, pair_cost
-from ._kdtree import STACK, box_gap, build, nearest, node_maxima
+from ._kdtree import STACK, box_gap, build, depth_first, nearest, node_maxima, right_first
 
 # Neighbours per point in the first sparse problem, and new edges per row per round.
 NEIGHBOURS = 8
@@ -95,6 +95,34 @@ def _neighbour_edges(a, b, tree, da, db, order, internal_p, inv_scale, cap, k, w
 
 
 @numba.njit(cache=True)
+def _cannot_violate(box, node, state):
+    """``_price``: no pair of row ``i`` with a point in the node's box is violated (its
+    cost's lower bound reaches the largest ``w`` inside, or sending both points to the
+    diagonal costs no more)."""
+    a, i, _, da, _, u, _, w_max, db_max, _, _, _, _, order, _, inv_scale, cap, tol = state
+    lower = cost(box_gap(box, node, a[i, 0], a[i, 1]), order, inv_scale, cap)
+    return lower - u[i] - w_max[node] >= -tol or lower >= min(da[i] + db_max[node], cap)
+
+
+@numba.njit(cache=True)
+def _violated(order_, s, e, state):
+    """``_price``: append the violated pairs of row ``i`` with the leaf's points that
+    the sparse problem does not hold, with their reduced costs."""
+    a, i, b, da, db, u, v, _, _, present, found_j, found_r, count = state[0:13]
+    order, internal_p, inv_scale, cap, tol = state[13:18]
+    for r in range(s, e):
+        j = order_[r]
+        if present[j]:
+            continue
+        c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
+        reduced = c - db[j] - u[i] - v[j]
+        if reduced < -tol and c < min(da[i] + db[j], cap):
+            found_j[count[0]] = j
+            found_r[count[0]] = reduced
+            count[0] += 1
+
+
+@numba.njit(cache=True)
 def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, cap, k, tol):
     """Edges missing from the sparse problem whose reduced cost is below ``-tol``: for
     each row, its ``k`` most negative ones (none: the sparse optimum is optimal).
@@ -104,7 +132,6 @@ def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, ca
     largest ``w`` inside them (or ``da[i]`` plus the largest ``db``) are skipped.
     """
     n, m = len(a), len(b)
-    order_, start, stop, left, box = tree
     w_max = node_maxima(tree, v[:m] + db)
     db_max = node_maxima(tree, db)
     present = np.zeros(m, np.bool_)
@@ -118,31 +145,11 @@ def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, ca
     for i in range(n):
         for f in range(ptr[i], ptr[i + 1] - 1):
             present[cols[f]] = True
-        x, y = a[i, 0], a[i, 1]
-        count = 0
-        stack[0] = 0
-        top = 1
-        while top > 0:
-            top -= 1
-            node = stack[top]
-            lower = cost(box_gap(box, node, x, y), order, inv_scale, cap)
-            if lower - u[i] - w_max[node] >= -tol or lower >= min(da[i] + db_max[node], cap):
-                continue
-            if left[node] >= 0:
-                stack[top] = left[node]
-                stack[top + 1] = left[node] + 1
-                top += 2
-                continue
-            for r in range(start[node], stop[node]):
-                j = order_[r]
-                if present[j]:
-                    continue
-                c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
-                reduced = c - db[j] - u[i] - v[j]
-                if reduced < -tol and c < min(da[i] + db[j], cap):
-                    found_j[count] = j
-                    found_r[count] = reduced
-                    count += 1
+        found = np.zeros(1, np.int64)
+        state = (a, i, b, da, db, u, v, w_max, db_max, present, found_j, found_r, found)
+        settings = (order, internal_p, inv_scale, cap, tol)
+        depth_first(tree, stack, _cannot_violate, right_first, _violated, state + settings)
+        count = found[0]
         for f in range(ptr[i], ptr[i + 1] - 1):
             present[cols[f]] = False
         if count > k:
