@@ -139,10 +139,6 @@ class Packed:
             for i in range(self.n_samples)
         ]
 
-    def rows_of_position(self, k: int) -> np.ndarray:
-        """The rows of diagram ``k`` of every sample, in one array."""
-        return self.only(k).points
-
 
 _EMPTY = np.empty((0, 2))
 

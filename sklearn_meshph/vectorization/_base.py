@@ -25,8 +25,9 @@ from ..diagrams.validation import Packed, pack_samples
 __all__ = [
     "BANDWIDTH",
     "COMMON_CONSTRAINTS",
-    "COMMON_PARAMETERS",
     "INFINITE_POLICIES",
+    "WEIGHT_CONSTRAINTS",
+    "WEIGHT_PARAMETER",
     "PackedVectorizer",
     "PolicyTransformer",
     "apply_infinite",
@@ -57,7 +58,7 @@ COMMON_CONSTRAINTS: dict = {
 }
 
 #: Their documentation (indented for a class docstring's Parameters section).
-COMMON_PARAMETERS = """infinite : {"drop", "clip", "error"}, default="drop"
+_COMMON_PARAMETERS = """infinite : {"drop", "clip", "error"}, default="drop"
         Points with infinite death (essential classes): dropped, clipped at the largest
         finite death of their position among the fitted diagrams (at the largest
         fitted birth where there is none), or refused.
@@ -71,7 +72,7 @@ COMMON_PARAMETERS = """infinite : {"drop", "clip", "error"}, default="drop"
         Deprecated name of ``infinite`` (a :class:`FutureWarning`)."""
 
 #: The attributes every vectorizer and kernel learns.
-COMMON_ATTRIBUTES = """n_diagrams_ : int
+_COMMON_ATTRIBUTES = """n_diagrams_ : int
         Diagrams per sample.
     clip_values_ : ndarray of shape (n_diagrams,)
         Where ``infinite="clip"`` clips the deaths of each position."""
@@ -81,7 +82,9 @@ def common_sections(attributes: str = "") -> str:
     """The end of a class docstring's Parameters section (the common parameters) and
     its Attributes section (``attributes``, then the common ones), indented for it."""
     first = f"{attributes}\n    " if attributes else ""
-    return f"{COMMON_PARAMETERS}\n\n    Attributes\n    ----------\n    {first}{COMMON_ATTRIBUTES}"
+    return (
+        f"{_COMMON_PARAMETERS}\n\n    Attributes\n    ----------\n    {first}{_COMMON_ATTRIBUTES}"
+    )
 
 
 #: The point-weight convention of the images and the kernels.
