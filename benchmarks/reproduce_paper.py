@@ -175,7 +175,7 @@ def main():
 
         from sklearn_meshph import plotting
 
-        plt = plotting._pyplot()
+        plt = plotting.pyplot()
         args.output.mkdir(parents=True, exist_ok=True)
         for k, r in enumerate(results):
             matrix = r["matrix"]

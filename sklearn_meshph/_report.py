@@ -1,4 +1,5 @@
-"""What the main job reports: the confusion summary, the data files and the pictures."""
+"""What the main job reports: the confusion summary, the data files (``summary.json``
+always valid JSON) and the pictures, each labelled by what it shows."""
 
 from __future__ import annotations
 
@@ -95,6 +96,27 @@ def _finite(matrix: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(matrix), matrix, cap)
 
 
+def json_safe(value):
+    """``value`` as plain JSON data: estimators by their class name, numbers as Python
+    numbers, infinite and NaN floats as the strings ``"inf"``, ``"-inf"`` and ``"nan"``,
+    tuples and arrays as lists, anything else by its ``repr``."""
+    if isinstance(value, dict):
+        return {str(key): json_safe(item) for key, item in value.items()}
+    if isinstance(value, list | tuple | np.ndarray):
+        return [json_safe(item) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, bool | int | str):
+        return value
+    if isinstance(value, float):
+        return value if np.isfinite(value) else str(value)
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "get_params") and not isinstance(value, type):
+        return type(value).__name__
+    return repr(value)
+
+
 def write_data(
     output: Path,
     *,
@@ -108,52 +130,46 @@ def write_data(
     filenames,
     summary,
 ) -> list[Path]:
-    """The result files (see the module docstring); returns their paths."""
+    """The result files (see the command line's help); ``diagrams.npz`` only when
+    ``diagrams`` is not None. Returns their paths."""
     output.mkdir(parents=True, exist_ok=True)
-    paths = [output / name for name in DATA_FILES]
-    np.save(paths[0], np.asarray(matrix, dtype=np.float64))
-    arrays = {}
-    for i, sample in enumerate(diagrams):
-        parts = sample if isinstance(sample, tuple) else (sample,)
-        for k, d in enumerate(parts):
-            arrays[f"sample_{i}_diagram_{k}"] = np.asarray(d, dtype=np.float64).reshape(-1, 2)
-    np.savez(
-        paths[1],
-        filenames=np.asarray(filenames, dtype=str),
-        labels=np.asarray(y),
-        target_names=np.asarray(names, dtype=str),
-        diagram_names=np.asarray(diagram_names, dtype=str),
-        **arrays,
-    )
-    with open(paths[2], "w", newline="", encoding="utf-8") as f:
+    paths = [output / name for name in DATA_FILES if diagrams is not None or "diagrams" not in name]
+    np.save(output / "distances.npy", np.asarray(matrix, dtype=np.float64))
+    if diagrams is not None:
+        arrays = {}
+        for i, sample in enumerate(diagrams):
+            for k, d in enumerate(sample):
+                arrays[f"sample_{i}_diagram_{k}"] = np.asarray(d, np.float64).reshape(-1, 2)
+        np.savez(
+            output / "diagrams.npz",
+            filenames=np.asarray(filenames, dtype=str),
+            labels=np.asarray(y),
+            target_names=np.asarray(names, dtype=str),
+            diagram_names=np.asarray(diagram_names, dtype=str),
+            **arrays,
+        )
+    with open(output / "predictions.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(["index", "file", "true label", "predicted label", "fold"])
         for i in range(len(y)):
             writer.writerow([i, filenames[i], names[y[i]], names[predicted[i]], int(fold_of[i])])
-    summary = dict(summary, files=[p.name for p in paths])
-    with open(paths[3], "w", encoding="utf-8") as f:
-        json.dump(summary, f, indent=2, default=_json_default)
+    summary = json_safe(dict(summary, files=[p.name for p in paths]))
+    with open(output / "summary.json", "w", encoding="utf-8") as f:
+        json.dump(summary, f, indent=2, allow_nan=False)
         f.write("\n")
     return paths
 
 
-def _json_default(value):
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray | tuple):
-        return list(value)
-    return str(value)
-
-
-def write_pictures(
-    output: Path, matrix, y, names, fields, diagrams, labels, random_state, eigen_index=None
-):
+def write_pictures(output: Path, matrix, y, names, fields, random_state, diagrams=None):
+    """``tsne.png`` (of ``matrix``), ``eigenfunctions.png`` (the first column of the
+    first field of each class, labelled by its ``column_names``) and, with ``diagrams`` as
+    ``(per-sample tuples, names)``, ``diagrams.png``; returns their paths."""
     from sklearn.manifold import TSNE
 
     from . import plotting
 
     output.mkdir(parents=True, exist_ok=True)
-    plt = plotting._pyplot()
+    plt = plotting.pyplot()
     written = []
     n_classes = len(names)
     if len(y) > 2:
@@ -164,37 +180,32 @@ def write_pictures(
         legend_cols = 1 if n_classes <= 20 else 2
         fig, ax = plt.subplots(figsize=(6 + 1.8 * legend_cols, 5))
         plotting.plot_embedding(embedding, y, names, ax=ax)
-        ax.set_title("t-SNE of the diagram distance matrix")
+        ax.set_title("t-SNE of the distance matrix (pipeline fitted on all samples)")
         written.append(_save(fig, output / "tsne.png"))
 
     examples = [int(np.flatnonzero(y == c)[0]) for c in range(n_classes)]
     cols = min(3 if n_classes <= 9 else 5, len(examples))
     rows = -(-len(examples) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows), squeeze=False)
-    for ax, i in zip(axes.ravel(), examples, strict=False):
-        plotting.plot_diagram(diagrams[i], ax=ax, labels=labels)
-        ax.set_title(_clip(str(names[y[i]]), 40))
-    for ax in axes.ravel()[len(examples) :]:
-        ax.set_axis_off()
-    written.append(_save(fig, output / "diagrams.png"))
+    if diagrams is not None:
+        samples, labels = diagrams
+        fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.6 * rows), squeeze=False)
+        for ax, i in zip(axes.ravel(), examples, strict=False):
+            plotting.plot_diagram(tuple(samples[i]), ax=ax, labels=labels)
+            ax.set_title(_clip(str(names[y[i]]), 40))
+        for ax in axes.ravel()[len(examples) :]:
+            ax.set_axis_off()
+        written.append(_save(fig, output / "diagrams.png"))
 
-    index = eigen_index[0] if isinstance(eigen_index, tuple) else eigen_index
-    which = f"eigenfunction {index}" if index is not None else "eigenfunction"
-    fig = plt.figure(figsize=(4 * cols, 3.6 * rows))
+    fig = plt.figure(figsize=(4 * cols, 3.8 * rows))
     for k, i in enumerate(examples):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
         field = fields[i]
-        values = field.columns()[0]
+        label = field.column_names[0]
         plotting.plot_mesh_function(
-            field.vertices, field.faces, values, ax=ax, colorbar_label=f"{which} value"
+            field.vertices, field.faces, field.columns()[0], ax=ax, colorbar_label=label
         )
-        ax.set_title(f"{_clip(str(names[y[i]]), 30)}: {which}", fontsize=9)
-    shown = (
-        f" (the first of eigen_index {', '.join(map(str, eigen_index))})"
-        if isinstance(eigen_index, tuple)
-        else ""
-    )
-    fig.suptitle(f"Laplacian {which}{shown}, first sample of each class")
+        ax.set_title(f"{_clip(str(names[y[i]]), 30)}:\n{label}", fontsize=8)
+    fig.suptitle("The first function of the eigen stage, first sample of each class")
     written.append(_save(fig, output / "eigenfunctions.png"))
     return written
 
@@ -204,6 +215,3 @@ def _save(fig, path: Path) -> Path:
     fig.savefig(path, dpi=110, bbox_inches="tight")
     fig.clf()
     return path
-
-
-# The main job ------------------------------------------------------------------------

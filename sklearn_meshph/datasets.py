@@ -19,7 +19,13 @@ from .mesh.reading import COMPRESSIONS
 from .mesh.validation import check_mesh
 from .pointcloud.reading import POINT_CLOUD_FORMATS, read_sample_file
 
-__all__ = ["SkippedFilesWarning", "load_mesh_folder", "make_shapes", "sample_point_cloud"]
+__all__ = [
+    "SHAPE_CLASSES",
+    "SkippedFilesWarning",
+    "load_mesh_folder",
+    "make_shapes",
+    "sample_point_cloud",
+]
 
 _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
@@ -277,6 +283,9 @@ _CLASSES = {
         ),
     ),
 }
+
+#: The classes of :func:`make_shapes`, in label order.
+SHAPE_CLASSES = tuple(_CLASSES)
 
 
 def _rotation_towards(rng, directions, max_angle):

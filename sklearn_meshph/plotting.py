@@ -6,10 +6,13 @@ import os
 
 import numpy as np
 
-__all__ = ["plot_diagram", "plot_embedding", "plot_mesh_function"]
+__all__ = ["plot_diagram", "plot_embedding", "plot_mesh_function", "pyplot"]
 
 
-def _pyplot():
+def pyplot():
+    """``matplotlib.pyplot``, rendering to files (the Agg backend) when there is no
+    screen and no ``MPLBACKEND``; an ``ImportError`` saying which extra to install
+    without matplotlib."""
     try:
         import matplotlib
 
@@ -24,7 +27,7 @@ def _pyplot():
 def _axes(ax, **kwargs):
     if ax is not None:
         return ax
-    return _pyplot().figure(figsize=(5, 4.5)).add_subplot(**kwargs)
+    return pyplot().figure(figsize=(5, 4.5)).add_subplot(**kwargs)
 
 
 def plot_diagram(diagram, ax=None, *, labels=None, title=None):
@@ -72,7 +75,7 @@ def plot_diagram(diagram, ax=None, *, labels=None, title=None):
 def _class_styles(n_classes: int):
     """A (colour, marker) per class: distinct for up to 10 classes by colour alone
     (tab10), beyond that tab20 colours combined with a cycle of markers."""
-    plt = _pyplot()
+    plt = pyplot()
     markers = "o"
     colors = plt.get_cmap("tab10").colors
     if n_classes > 10:
@@ -158,7 +161,7 @@ def plot_mesh_function(
         values = field.columns()[0]
         if colorbar_label is None and getattr(field, "eigenvalues", None) is not None:
             colorbar_label = "eigenfunction value"
-    plt = _pyplot()
+    plt = pyplot()
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     ax = _axes(ax, projection="3d")

@@ -1,9 +1,14 @@
-"""The command line's main job as a tool: options, errors, result files, many classes."""
+"""The command line's main job as a tool: options, errors, result files, many classes,
+the preset pipeline fitted per fold, the cache, skipped files and pipes."""
 
 import csv
 import gzip
 import importlib.util
 import json
+import os
+import subprocess
+import sys
+import tempfile
 
 import numpy as np
 import pytest
@@ -14,10 +19,15 @@ from sklearn_meshph import (
     DiagramDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
+    cli,
     load_mesh_folder,
+    make_mesh_distance,
+    make_shapes,
     pairwise_diagram_distances,
 )
 from sklearn_meshph.cli import build_parser, format_confusion, main
+
+FAST = ["--no-plots", "--verbose", "0", "--n-jobs", "1"]
 
 
 def _one_error_line(capfd):
@@ -35,7 +45,7 @@ def _write_classes(root, n_classes, per_class, name="class_with_a_rather_long_na
         folder = root / name.format(c)
         folder.mkdir(parents=True)
         for k in range(per_class):
-            mesh = trimesh.creation.icosphere(1)
+            mesh = trimesh.creation.icosphere(2)  # enough vertices for the default's eigenpairs
             scale = 1.0 + 0.15 * c * rng.uniform(0.8, 1.2, size=3) * [1.0, 0.5, 0.25]
             mesh.vertices = mesh.vertices * scale
             mesh.export(folder / f"m{k}.ply")
@@ -81,12 +91,114 @@ def test_small_class_is_refused_before_loading(tmp_path, capfd, monkeypatch):
     assert "--folds 3" in line and "class_with_a_rather_long_name_00" in line
 
 
+@pytest.fixture
+def no_computation(monkeypatch):
+    """Any sample generated, loaded or solved fails the test."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("computation started before the options were checked")
+
+    monkeypatch.setattr(cli, "make_shapes", refuse)
+    monkeypatch.setattr(cli, "_load", refuse)
+    monkeypatch.setattr(cli, "compute_fields", refuse)
+
+
 @pytest.mark.parametrize(
-    "options", [["--folds", "1"], ["--neighbors", "0"], ["--order", "0.5"], ["--n-jobs", "0"]]
+    ("options", "message"),
+    [
+        (["--folds", "1"], "--folds must be at least 2"),
+        (["--neighbors", "0"], "--neighbors must be at least 1"),
+        (["--n-jobs", "0"], "--n-jobs must not be 0"),
+        (["--preset", "nope"], "'preset' parameter of make_mesh_distance"),
+        (["--memory", ""], "--memory must name a folder"),
+        (["--n-scales", "0"], "'n_scales' parameter of LaplacianEigenTransformer"),
+        (["--set", "eigen__n_scales=0"], "'n_scales' parameter of LaplacianEigenTransformer"),
+        (["--set", "distance__ord1__distance__order=0.5"], "'order' parameter of DiagramDistance"),
+        (["--set", "distance__ord1__persistence__filtration=up"], "'filtration' parameter"),
+        (["--set", "eigen__laplacian=nope"], "'laplacian' parameter"),
+        (["--set", "eigen__no_such_thing=1"], "no_such_thing"),
+        (["--set", "nowhere__x=1"], "nowhere"),
+        (["--preset", "paper", "--set", "distance__ord1__x=1"], "ord1"),
+        (["--neighbors", "10", "--folds", "2"], "--neighbors 10 is larger than the smallest"),
+    ],
 )
-def test_bad_options_are_one_line_and_status_2(tmp_path, capfd, options):
-    assert main([*options, "--n-per-class", "3", "--output", str(tmp_path)]) == 2
-    _one_error_line(capfd)
+def test_bad_options_are_one_line_and_status_2_before_computing(
+    tmp_path, capfd, no_computation, options, message
+):
+    argv = ["--folds", "2", "--n-per-class", "3", "--output", str(tmp_path / "out")]
+    assert main([*FAST, *argv, *options]) == 2
+    assert message in _one_error_line(capfd)
+    assert not (tmp_path / "out").exists()
+
+
+def test_set_values_are_read_as_json_or_python_literals(tmp_path):
+    parser = build_parser()
+    argv = ["--set", "eigen__eigen_index=(1, 2)", "--set", "eigen__laplacian=graph"]
+    argv += ["--set", 'distance__weights={"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0}']
+    argv += ["--set", "distance__ord1__distance__order=inf", "--set", "eigen__n_eigenpairs=null"]
+    args = parser.parse_args([*argv, "--eigen-index", "2", "--output", str(tmp_path)])
+    pipeline = cli.build_pipeline(args)
+    eigen = pipeline.named_steps["eigen"]
+    assert eigen.eigen_index == (1, 2)  # --set comes after the eigen options
+    assert eigen.laplacian == "graph" and eigen.n_eigenpairs is None
+    assert pipeline.get_params()["distance__weights"]["ext0"] == 0
+    assert pipeline.get_params()["distance__ord1__distance__order"] == float("inf")
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--set", "no_equals_sign"])
+
+
+def test_the_eigen_options_override_only_when_given(tmp_path):
+    from sklearn_meshph.pipelines import PRESETS, make_mesh_distance
+
+    for preset in PRESETS.names:
+        args = build_parser().parse_args(["--preset", preset, "--random-state", "3"])
+        built = cli.build_pipeline(args).get_params()
+        expected = make_mesh_distance(preset, random_state=3, n_jobs=-1, verbose=1).get_params()
+        assert {k: repr(v) for k, v in built.items()} == {k: repr(v) for k, v in expected.items()}
+    args = build_parser().parse_args(["--n-scales", "2", "--laplacian", "graph"])
+    eigen = cli.build_pipeline(args).named_steps["eigen"]
+    assert (eigen.n_scales, eigen.laplacian, eigen.signature) == (2, "graph", "log-hks")
+
+
+def test_an_output_that_cannot_be_written_is_refused(tmp_path, capfd, no_computation):
+    a_file = tmp_path / "results.txt"
+    a_file.write_text("not a folder")
+    for output, message in [
+        (a_file, "exists and is not a folder"),
+        (a_file / "sub" / "dir", "which is a file"),
+    ]:
+        assert main(["--n-per-class", "5", "--output", str(output), *FAST]) == 2
+        assert message in _one_error_line(capfd)
+
+
+def test_a_read_only_output_folder_is_refused(tmp_path, capfd, no_computation, monkeypatch):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    if os.geteuid() != 0:  # root writes anywhere: stand in for the refusal
+        locked.chmod(0o500)
+    else:
+
+        def refuse(*args, **kwargs):
+            raise PermissionError(13, "Permission denied")
+
+        monkeypatch.setattr(tempfile, "TemporaryFile", refuse)
+    try:
+        assert main(["--n-per-class", "5", "--output", str(locked / "out"), *FAST]) == 2
+    finally:
+        locked.chmod(0o700)
+    assert "cannot be written" in _one_error_line(capfd)
+    assert not (locked / "out").exists()
+
+
+def test_neighbors_larger_than_a_training_fold_is_refused_before_loading(
+    tmp_path, capfd, no_computation
+):
+    data = _write_classes(tmp_path / "data", 2, 3)  # 6 meshes, 3 folds: training folds of 4
+    argv = [str(data), "--folds", "3", "--neighbors", "5", "--output", str(tmp_path / "o")]
+    assert main([*argv, *FAST]) == 2
+    assert "--neighbors 5 is larger than the smallest training fold (4 samples)" in (
+        _one_error_line(capfd)
+    )
 
 
 def test_unknown_extension_list_is_used(tmp_path, capfd):
@@ -98,8 +210,8 @@ def test_unknown_extension_list_is_used(tmp_path, capfd):
 
 def test_data_files_are_written_and_readable(tmp_path, capsys):
     out = tmp_path / "results"
-    argv = ["--n-per-class", "3", "--folds", "3", "--no-plots", "--n-jobs", "1"]
-    assert main([*argv, "--output", str(out), "--verbose", "0"]) == 0
+    argv = ["--n-per-class", "3", "--folds", "3", "--preset", "paper", *FAST]
+    assert main([*argv, "--output", str(out)]) == 0
     stdout = capsys.readouterr().out
     assert sorted(p.name for p in out.iterdir()) == [
         "diagrams.npz",
@@ -118,11 +230,11 @@ def test_data_files_are_written_and_readable(tmp_path, capsys):
         assert len(archive["filenames"]) == 18 and archive["labels"].tolist() == sorted(
             archive["labels"].tolist()
         )
-        assert set(LowerStarPersistence().diagram_names()) < {
-            name.split(": ")[-1] for name in archive["diagram_names"]
-        } | {""}
-    # The saved diagrams give back the saved distances.
-    np.testing.assert_allclose(DiagramDistance().fit_transform(diagrams), matrix)
+        assert archive["diagram_names"].tolist() == LowerStarPersistence(
+            filtration="sublevel"
+        ).diagram_names(1)
+    # The saved diagrams give back the saved distances (the preset fitted on all).
+    np.testing.assert_allclose(DiagramDistance("bottleneck").fit_transform(diagrams), matrix)
     with open(out / "predictions.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert list(rows[0]) == ["index", "file", "true label", "predicted label", "fold"]
@@ -134,7 +246,8 @@ def test_data_files_are_written_and_readable(tmp_path, capsys):
     accuracy = np.mean([row["true label"] == row["predicted label"] for row in rows])
     assert summary["accuracy"]["mean"] == pytest.approx(accuracy, abs=0.02)
     assert f"accuracy: {summary['accuracy']['mean']:.3f}" in stdout
-    assert summary["settings"]["folds"] == 3 and "eigenfunctions" in summary["timings"]
+    assert summary["settings"]["folds"] == 3 and "eigen stage" in summary["timings"]
+    assert summary["preset"] == "paper" and summary["pipeline"]["eigen__laplacian"] == "graph"
 
 
 def test_many_classes_wrapped_confusion_and_pictures(tmp_path, capsys):
@@ -198,7 +311,7 @@ def test_verbose_zero_prints_nothing(capsys):
 def _write_clouds(root, n_points=400):
     """A labelled folder of point clouds sampled from make_shapes, in each format read:
     .xyz text, gzipped .pts (count first), PLY of vertices only."""
-    from sklearn_meshph import make_shapes, sample_point_cloud
+    from sklearn_meshph import sample_point_cloud
 
     classes = ("blob", "snake", "star")
     meshes, y = make_shapes(n_per_class=3, classes=classes, random_state=0, return_X_y=True)
@@ -228,11 +341,9 @@ def test_main_job_on_a_folder_of_point_clouds(tmp_path, capsys):
     assert main(argv) == 0
     stdout = capsys.readouterr().out
     assert "9 point clouds, 3 classes" in stdout
-    # The same matrix as the estimators on the clouds read by load_mesh_folder.
-    fields = LaplacianEigenTransformer(random_state=0).fit_transform(loaded.data)
-    expected = DiagramDistance().fit_transform(LowerStarPersistence().fit_transform(fields))
+    # The same matrix as the default pipeline fitted on the clouds load_mesh_folder reads.
+    expected = make_mesh_distance(random_state=0).fit_transform(loaded.data)
     np.testing.assert_allclose(np.load(out / "distances.npy"), expected, rtol=1e-12)
-    assert all(len(f.faces) == 0 and len(f.edges) > 0 for f in fields)
     with open(out / "predictions.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert [row["file"] for row in rows[:3]] == [
@@ -256,3 +367,207 @@ def test_point_cloud_files_are_named_when_broken(tmp_path, capfd):
     )
     assert code == 1
     assert "star/scan8.xyz" in _one_error_line(capfd)
+
+
+def test_summary_is_valid_json_with_the_preset_and_every_parameter(tmp_path):
+    out = tmp_path / "out"
+    argv = ["--n-per-class", "2", "--folds", "2", "--output", str(out), *FAST]
+    assert main([*argv, "--set", "distance__ord1__distance__internal_p=inf"]) == 0
+    text = (out / "summary.json").read_text()
+
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+
+    summary = json.loads(text, parse_constant=refuse)
+    assert summary["preset"] == "default"
+    pipeline = cli.build_pipeline(build_parser().parse_args(argv))
+    assert set(summary["pipeline"]) == set(pipeline.get_params(deep=True))
+    assert summary["pipeline"]["eigen"] == "LaplacianEigenTransformer"
+    assert summary["pipeline"]["eigen__signature"] == "log-hks"
+    assert summary["pipeline"]["distance__ord1__distance__internal_p"] == "inf"
+    assert summary["settings"]["assignments"] == [["distance__ord1__distance__internal_p", "inf"]]
+
+
+def test_json_safe_values():
+    from sklearn_meshph._report import json_safe
+
+    value = {
+        "a": float("inf"),
+        "b": -np.inf,
+        "c": np.nan,
+        "d": (1, np.float64(2.5), np.int64(3)),
+        "e": DiagramDistance(),
+        "f": np.arange(2),
+        "g": None,
+        "h": {"x": True},
+        "i": object,
+    }
+    safe = json_safe(value)
+    assert safe == {
+        "a": "inf",
+        "b": "-inf",
+        "c": "nan",
+        "d": [1, 2.5, 3],
+        "e": "DiagramDistance",
+        "f": [0, 1],
+        "g": None,
+        "h": {"x": True},
+        "i": repr(object),
+    }
+    json.dumps(safe, allow_nan=False)
+
+
+def test_each_fold_learns_its_medians_from_its_training_samples_only(monkeypatch):
+    from sklearn.model_selection import StratifiedKFold
+    from sklearn.neighbors import KNeighborsClassifier
+    from sklearn.pipeline import Pipeline
+
+    from sklearn_meshph import ScalarField
+
+    mesh = trimesh.creation.icosphere(2)
+    rng = np.random.default_rng(0)
+    noise = rng.normal(scale=0.1, size=(12, len(mesh.vertices)))
+    heights = [mesh.vertices[:, 2] * (1 + k % 3) * (1 + k / 10) + noise[k] for k in range(12)]
+    fields = [ScalarField(mesh.vertices, mesh.faces, h) for h in heights]
+    y = np.arange(12) % 3
+    distance = Pipeline(
+        [
+            ("persistence", LowerStarPersistence()),
+            ("distance", DiagramDistance(normalization="median")),
+        ]
+    )
+    blocks = []
+
+    class Capture(KNeighborsClassifier):
+        def fit(self, X, y):
+            blocks.append(("train", np.array(X)))
+            return super().fit(X, y)
+
+        def predict(self, X):
+            blocks.append(("test", np.array(X)))
+            return super().predict(X)
+
+    monkeypatch.setattr("sklearn_meshph.cli.KNeighborsClassifier", Capture)
+    tables = []
+    model = cli.on_indices(distance, fields, tables)
+    assert len(tables) == 1  # persistence once, for all samples
+    cli.cross_validate(model, y, 3, 1, 0)
+    diagrams = LowerStarPersistence().fit_transform(fields)
+    everything = DiagramDistance(normalization="median").fit(diagrams)
+    cv = StratifiedKFold(3, shuffle=True, random_state=0).split(np.zeros((12, 1)), y)
+    for k, (train, test) in enumerate(cv):
+        fold = DiagramDistance(normalization="median").fit([diagrams[i] for i in train])
+        assert not np.allclose(fold.scales_, everything.scales_)  # the test can tell
+        (kind, train_block), (kind2, test_block) = blocks[2 * k], blocks[2 * k + 1]
+        assert (kind, kind2) == ("train", "test")
+        np.testing.assert_allclose(train_block, fold.transform([diagrams[i] for i in train]))
+        np.testing.assert_allclose(test_block, fold.transform([diagrams[i] for i in test]))
+
+
+def _solves(monkeypatch):
+    """A list that grows by one for every mesh the eigen stage solves in this process."""
+    from sklearn_meshph.spectral import transformer
+
+    solves = []
+    solve = transformer.mesh_eigenpairs
+
+    def counting(*args):
+        solves.append(1)
+        return solve(*args)
+
+    monkeypatch.setattr(transformer, "mesh_eigenpairs", counting)
+    return solves
+
+
+def test_memory_is_hit_on_a_second_run(tmp_path, monkeypatch):
+    solves = _solves(monkeypatch)
+    argv = ["--n-per-class", "2", "--folds", "2", "--memory", str(tmp_path / "cache"), *FAST]
+    assert main([*argv, "--output", str(tmp_path / "a")]) == 0
+    assert len(solves) == 12
+    assert main([*argv, "--output", str(tmp_path / "b")]) == 0
+    assert len(solves) == 12  # every mesh read from the cache
+    first, second = (np.load(tmp_path / o / "distances.npy") for o in "ab")
+    np.testing.assert_array_equal(first, second)
+    assert main([*FAST, "--n-per-class", "2", "--folds", "2", "--output", str(tmp_path / "c")]) == 0
+    assert len(solves) == 24  # no cache unless --memory is given
+
+
+def test_cross_validation_is_scikit_learns_on_the_preset_pipeline(tmp_path, capsys):
+    from sklearn.model_selection import StratifiedKFold, cross_val_score
+    from sklearn.neighbors import KNeighborsClassifier
+    from sklearn.pipeline import make_pipeline
+
+    cache = str(tmp_path / "cache")
+    argv = ["--n-per-class", "3", "--folds", "3", "--memory", cache, "--output", str(tmp_path)]
+    assert main([*argv, *FAST]) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    # The whole pipeline fitted on each training fold by scikit-learn: the same scores.
+    meshes, y = make_shapes(
+        n_per_class=3, resolution=cli._BUILT_IN_RESOLUTION, random_state=0, return_X_y=True
+    )
+    model = make_pipeline(
+        make_mesh_distance(memory=cache, random_state=0),
+        KNeighborsClassifier(n_neighbors=1, metric="precomputed"),
+    )
+    cv = StratifiedKFold(3, shuffle=True, random_state=0)
+    scores = cross_val_score(model, meshes, y, cv=cv)
+    np.testing.assert_allclose(summary["accuracy"]["per_fold"], scores)
+    full = make_mesh_distance(memory=cache, random_state=0).fit_transform(meshes)
+    np.testing.assert_allclose(np.load(tmp_path / "distances.npy"), full, rtol=1e-12)
+
+
+def test_unreadable_files_are_skipped_and_listed_on_request(tmp_path, capfd):
+    data = _write_classes(tmp_path / "data", 2, 3)
+    bad = data / "class_with_a_rather_long_name_01" / "m1.ply"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n not a mesh")
+    argv = [str(data), "--folds", "2", "--output", str(tmp_path / "o"), *FAST]
+    assert main(argv) == 1
+    line = _one_error_line(capfd)
+    assert "class_with_a_rather_long_name_01/m1.ply" in line and "not a valid" in line
+    assert main([*argv, "--skip-unreadable"]) == 0
+    captured = capfd.readouterr()
+    assert "skipped 1 file(s) that cannot be read" in captured.out
+    assert "m1.ply" in captured.out and "Traceback" not in captured.err
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["n_samples"] == 5 and summary["class_counts"] == [3, 2]
+    assert [s["file"] for s in summary["skipped"]] == ["class_with_a_rather_long_name_01/m1.ply"]
+    with open(tmp_path / "o" / "predictions.csv", newline="") as f:
+        files = [row["file"] for row in csv.DictReader(f)]
+    assert "class_with_a_rather_long_name_01/m1.ply" not in files and len(files) == 5
+
+
+@pytest.mark.parametrize("extra", [[], ["--help"]])
+def test_a_closed_pipe_ends_quietly(tmp_path, extra):
+    argv = ["-m", "sklearn_meshph", "--n-per-class", "2", "--folds", "2", *FAST]
+    process = subprocess.Popen(
+        [sys.executable, *argv, "--output", str(tmp_path), *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    process.stdout.close()  # as `| head -0` would: every write meets a closed pipe
+    stderr = process.stderr.read().decode()
+    assert process.wait(timeout=300) == 0, stderr
+    assert "Traceback" not in stderr and "BrokenPipe" not in stderr and "Exception" not in stderr
+
+
+def test_pictures_say_what_they_show(tmp_path, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from sklearn_meshph import plotting
+
+    labels = []
+    draw = plotting.plot_mesh_function
+
+    def recording(*args, colorbar_label=None, **kwargs):
+        labels.append(colorbar_label)
+        return draw(*args, colorbar_label=colorbar_label, **kwargs)
+
+    monkeypatch.setattr(plotting, "plot_mesh_function", recording)
+    argv = ["--n-per-class", "2", "--folds", "2", "--verbose", "0", "--n-jobs", "1"]
+    assert main([*argv, "--output", str(tmp_path / "a")]) == 0
+    assert len(labels) == 6
+    assert all(label.startswith("log heat kernel signature") and "t=" in label for label in labels)
+    assert (tmp_path / "a" / "eigenfunctions.png").stat().st_size > 0
+    labels.clear()
+    paper = [*argv, "--preset", "paper", "--no-plots"]
+    assert main([*paper[:-1], "--output", str(tmp_path / "b")]) == 0
+    assert labels == ["eigenfunction 1"] * 6
