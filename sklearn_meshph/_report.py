@@ -117,27 +117,21 @@ def json_safe(value):
     return repr(value)
 
 
-def write_data(
-    output: Path,
-    *,
-    matrix,
-    diagrams,
-    diagram_names,
-    y,
-    predicted,
-    fold_of,
-    names,
-    filenames,
-    summary,
-) -> list[Path]:
-    """The result files (see the command line's help); ``diagrams.npz`` only when
-    ``diagrams`` is not None. Returns their paths."""
+def write_data(output: Path, matrix, diagrams, predictions, names, filenames, summary):
+    """The result files (see the command line's help); returns their paths.
+
+    ``diagrams`` is ``(per-sample tuples of diagrams, their names)``, or None for no
+    ``diagrams.npz``; ``predictions`` is ``(true labels, predicted labels, fold of each
+    sample)``.
+    """
+    y, predicted, fold_of = predictions
     output.mkdir(parents=True, exist_ok=True)
-    paths = [output / name for name in DATA_FILES if diagrams is not None or "diagrams" not in name]
+    paths = [output / f for f in DATA_FILES if diagrams is not None or "diagrams" not in f]
     np.save(output / "distances.npy", np.asarray(matrix, dtype=np.float64))
     if diagrams is not None:
+        samples, diagram_names = diagrams
         arrays = {}
-        for i, sample in enumerate(diagrams):
+        for i, sample in enumerate(samples):
             for k, d in enumerate(sample):
                 arrays[f"sample_{i}_diagram_{k}"] = np.asarray(d, np.float64).reshape(-1, 2)
         np.savez(

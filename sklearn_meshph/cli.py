@@ -399,18 +399,9 @@ def _run(args) -> int:
         "warnings": warned,
         "timings": dict(timings, total=time.perf_counter() - start),
     }
-    written = write_data(
-        args.output,
-        matrix=matrix,
-        diagrams=None if diagrams is None else diagrams[0],
-        diagram_names=[] if diagrams is None else diagrams[1],
-        y=y,
-        predicted=predicted,
-        fold_of=fold_of,
-        names=class_names,
-        filenames=filenames,
-        summary=summary,
-    )
+    predictions = (y, predicted, fold_of)
+    labels = (class_names, filenames)
+    written = write_data(args.output, matrix, diagrams, predictions, *labels, summary)
     timings["total"] = time.perf_counter() - start
     print(f"results in {args.output}: " + ", ".join(p.name for p in written))
     print("\ntime per stage (s)")
