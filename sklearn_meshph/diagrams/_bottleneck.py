@@ -12,7 +12,7 @@ import numpy as np
 
 from ._assignment import DIAGONAL, augment, collapse, transpose
 from ._kdtree import STACK, build, nearest, within
-from ._matching import max_flow, max_matching
+from ._matching import breadth_first, max_flow, max_matching
 
 
 @numba.njit(cache=True)
@@ -300,6 +300,23 @@ def _threshold_search(a, count_a, b, count_b):
 
 
 @numba.njit(cache=True)
+def _free_or_optional(j, e, i, queue, tail, state):
+    """``bottleneck_partners``: point ``i`` of ``a`` reached from point ``j`` of ``b``
+    ends the path when it is free, or when its partner may go to the diagonal (which
+    then gives it up); otherwise the search goes on from its partner."""
+    via, match_a, match_b, must_b = state
+    via[i] = j
+    mate = match_a[i]
+    if mate < 0:
+        return True, tail
+    if not must_b[mate]:
+        match_b[mate] = -1
+        return True, tail
+    queue[tail] = mate
+    return False, tail + 1
+
+
+@numba.njit(cache=True)
 def bottleneck_partners(a, b, t):
     """A matching of two finite diagrams that moves no point by more than ``t``.
 
@@ -339,28 +356,9 @@ def bottleneck_partners(a, b, t):
         if not must_b[start] or match_b[start] >= 0:
             continue
         seen[:] = False
-        head, tail = 0, 1
         queue[0] = start
-        end = -1
-        while head < tail and end < 0:
-            j = queue[head]
-            head += 1
-            for e in range(t_ptr[j], t_ptr[j + 1]):
-                i = t_adj[e]
-                if seen[i]:
-                    continue
-                seen[i] = True
-                via[i] = j
-                mate = match_a[i]
-                if mate < 0:
-                    end = i
-                    break
-                if not must_b[mate]:
-                    match_b[mate] = -1
-                    end = i
-                    break
-                queue[tail] = mate
-                tail += 1
+        state = (via, match_a, match_b, must_b)
+        end = breadth_first(t_ptr, t_adj, queue, 1, seen, _free_or_optional, state)
         if end < 0:
             raise RuntimeError("no matching at the bottleneck threshold")
         i = end

@@ -110,6 +110,40 @@ def max_matching(adj_ptr, adj, n_left, n_right, start):
                         edge_pos[stack[top]] += 1
 
 
+@numba.njit(cache=True, inline="always")
+def breadth_first(ptr, adj, queue, tail, seen, reach, state):
+    """Breadth-first search of an alternating path: from the vertices ``queue[:tail]``
+    along the edges ``(ptr, adj)`` to the vertices of the other side not ``seen`` yet.
+    Each is marked seen and given to ``reach(x, e, y, queue, tail, state)`` (reached
+    from ``x`` along edge ``e``), which returns whether the path ends there and the
+    queue's new end (it queues the vertices to go on from). Returns the vertex the
+    path ends at, or -1. Inlined into each caller, with its own ``reach``."""
+    head = 0
+    while head < tail:
+        x = queue[head]
+        head += 1
+        for e in range(ptr[x], ptr[x + 1]):
+            y = adj[e]
+            if seen[y]:
+                continue
+            seen[y] = True
+            found, tail = reach(x, e, y, queue, tail, state)
+            if found:
+                return y
+    return -1
+
+
+@numba.njit(cache=True)
+def _column_with_room(r, e, j, queue, tail, state):
+    """``max_flow``: column ``j`` reached along edge ``e`` ends the path when it has
+    room; otherwise the search goes on back from it, to the rows that send it flow."""
+    via_col, taken, capacity, t_ptr, t_edge, row_of, flow, seen_row, via_row = state
+    via_col[j] = e
+    if taken[j] < capacity[j]:
+        return True, tail
+    return False, rows_back(j, t_ptr, t_edge, row_of, flow, seen_row, via_row, queue, tail)
+
+
 @numba.njit(cache=True)
 def max_flow(ptr, adj, demand, capacity):
     """Largest flow from rows (each sending at most ``demand[r]``) along the edges
@@ -146,21 +180,8 @@ def max_flow(ptr, adj, demand, capacity):
                 via_row[r] = -1
                 queue[tail] = r
                 tail += 1
-        head = 0
-        end = -1
-        while head < tail and end < 0:
-            r = queue[head]
-            head += 1
-            for e in range(ptr[r], ptr[r + 1]):
-                j = adj[e]
-                if seen_col[j]:
-                    continue
-                seen_col[j] = True
-                via_col[j] = e
-                if taken[j] < capacity[j]:
-                    end = j
-                    break
-                tail = rows_back(j, t_ptr, t_edge, row_of, flow, seen_row, via_row, queue, tail)
+        state = (via_col, taken, capacity, t_ptr, t_edge, row_of, flow, seen_row, via_row)
+        end = breadth_first(ptr, adj, queue, tail, seen_col, _column_with_room, state)
         if end < 0:
             return total
         amount, root = path_room(
