@@ -159,3 +159,15 @@ def test_the_checks_catch_broken_conventions(estimator, check, message):
     """The checks above can fail: each catches an estimator that breaks one convention."""
     with pytest.raises((AssertionError, RuntimeError), match=message):
         check(type(estimator).__name__, estimator)
+
+
+@pytest.mark.parametrize("estimator", SAMPLE_ESTIMATORS, ids=lambda e: type(e).__name__)
+def test_every_estimator_of_samples_accepts_set_output(estimator):
+    """``Pipeline.set_output`` calls ``set_output`` on every step: each estimator of
+    samples accepts it (tables become DataFrames, fields and diagrams stay as they
+    are), and refuses an unknown container by name."""
+    estimator = clone(estimator)
+    assert estimator.set_output(transform="pandas") is estimator
+    assert clone(estimator)._sklearn_output_config == {"transform": "pandas"}
+    with pytest.raises(ValueError, match="transform must be one of"):
+        estimator.set_output(transform="table")
