@@ -156,7 +156,7 @@ class _NamedParts:
         )
 
     def __call__(self, value) -> bool:
-        if not value or not self.is_list_of_pairs(value):
+        if not self.is_list_of_pairs(value) or not value:
             return False
         names = [name for name, _ in value]
         return (
