@@ -345,8 +345,8 @@ def make_shapes(
     and ``"hand"`` (five on one side). Every mesh gets a random pose (limb directions turned
     by up to 15 degrees, limb lengths and body axes varied by 10-15%), a random rotation,
     a random uniform scale between 0.1 and 10, small radial noise, and a random
-    resolution: a UV sphere tessellation with 18 to 40 rings and segments (about 300 to
-    1,600 vertices), randomly oriented. Every class draws its resolutions from the same
+    resolution: a UV sphere tessellation whose ring and segment counts are drawn from
+    ``resolution``, randomly oriented. Every class draws its resolutions from the same
     range, so the vertex count does not reveal the class.
 
     Parameters
