@@ -108,20 +108,22 @@ def node_maxima(tree, weights):
 def depth_first(tree, stack, skip, first_child, leaf, state):
     """Visit the leaves of ``tree`` depth-first from the root.
 
-    A node for which ``skip(box, node, state)`` holds is passed over with everything
-    below it; of an inner node's children ``left`` and ``left + 1``, child
+    A node for which ``skip(box, node, count, state)`` holds is passed over with
+    everything below it; of an inner node's children ``left`` and ``left + 1``, child
     ``left + first_child(box, left, state)`` is visited first; ``leaf(order, s, e,
-    state)`` sees the points ``order[s:e]`` of each leaf reached. ``state`` is the
-    caller's (a tuple): what the three functions read and write. Inlined into each
-    caller, which compiles it with its own functions.
+    count, state)`` sees the points ``order[s:e]`` of each leaf reached and returns the
+    new ``count`` (of the points it kept, from 0), which the descent returns. ``state``
+    is the caller's (a tuple): what the three functions read and write. Inlined into
+    each caller, which compiles it with its own functions.
     """
     order, start, stop, left, box = tree
+    count = 0
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         node = stack[top]
-        if skip(box, node, state):
+        if skip(box, node, count, state):
             continue
         if left[node] >= 0:
             first = first_child(box, left[node], state)
@@ -129,14 +131,15 @@ def depth_first(tree, stack, skip, first_child, leaf, state):
             stack[top + 1] = left[node] + first
             top += 2
             continue
-        leaf(order, start[node], stop[node], state)
+        count = leaf(order, start[node], stop[node], count, state)
+    return count
 
 
 @numba.njit(cache=True)
-def _beyond_the_kth(box, node, state):
+def _beyond_the_kth(box, node, count, state):
     """``nearest``: the node cannot hold a point nearer than the k-th found so far."""
-    _, x, y, k, _, best_g, _, count = state
-    return count[0] == k and box_gap(box, node, x, y) >= best_g[k - 1]
+    _, x, y, k, _, best_g, _ = state
+    return count == k and box_gap(box, node, x, y) >= best_g[k - 1]
 
 
 @numba.njit(cache=True)
@@ -147,22 +150,23 @@ def _nearer_child(box, first, state):
 
 
 @numba.njit(cache=True)
-def _keep_nearest(order, s, e, state):
+def _keep_nearest(order, s, e, count, state):
     """``nearest``: insert the leaf's points among the k nearest found so far."""
-    points, x, y, k, internal_p, best_g, best_j, count = state
+    points, x, y, k, internal_p, best_g, best_j = state
     for r in range(s, e):
         j = order[r]
         g = ground(abs(x - points[j, 0]), abs(y - points[j, 1]), internal_p)
-        if count[0] == k and g >= best_g[k - 1]:
+        if count == k and g >= best_g[k - 1]:
             continue
-        pos = count[0] if count[0] < k else k - 1
+        pos = count if count < k else k - 1
         while pos > 0 and best_g[pos - 1] > g:
             best_g[pos] = best_g[pos - 1]
             best_j[pos] = best_j[pos - 1]
             pos -= 1
         best_g[pos] = g
         best_j[pos] = j
-        count[0] = min(count[0] + 1, k)
+        count = min(count + 1, k)
+    return count
 
 
 @numba.njit(cache=True)
@@ -170,14 +174,12 @@ def nearest(tree, points, x, y, k, internal_p, best_g, best_j, stack):
     """The ``k`` points nearest to ``(x, y)`` in the L-``internal_p`` metric, by
     increasing distance (ties in the order the tree meets them) in ``best_g`` and
     ``best_j``; returns how many (fewer when there are fewer points)."""
-    count = np.zeros(1, np.int64)
-    state = (points, x, y, k, internal_p, best_g, best_j, count)
-    depth_first(tree, stack, _beyond_the_kth, _nearer_child, _keep_nearest, state)
-    return count[0]
+    state = (points, x, y, k, internal_p, best_g, best_j)
+    return depth_first(tree, stack, _beyond_the_kth, _nearer_child, _keep_nearest, state)
 
 
 @numba.njit(cache=True)
-def _beyond_reach(box, node, state):
+def _beyond_reach(box, node, count, state):
     """``within``: the node's box is farther than the reach."""
     return box_gap(box, node, state[1], state[2]) > state[3]
 
@@ -195,24 +197,23 @@ def right_first(box, first, state):
 
 
 @numba.njit(cache=True)
-def _keep_within(order, s, e, state):
+def _keep_within(order, s, e, count, state):
     """``within``: append the leaf's points within the reach."""
-    points, x, y, reach, out, count = state
+    points, x, y, reach, out = state
     for r in range(s, e):
         j = order[r]
         if max(abs(x - points[j, 0]), abs(y - points[j, 1])) <= reach:
-            out[count[0]] = j
-            count[0] += 1
+            out[count] = j
+            count += 1
+    return count
 
 
 @numba.njit(cache=True)
 def within(tree, points, x, y, reach, out, stack):
     """The points at L-infinity distance at most ``reach`` from ``(x, y)``, in tree
     order, written to ``out``; returns how many."""
-    count = np.zeros(1, np.int64)
-    state = (points, x, y, reach, out, count)
-    depth_first(tree, stack, _beyond_reach, left_first, _keep_within, state)
-    return count[0]
+    state = (points, x, y, reach, out)
+    return depth_first(tree, stack, _beyond_reach, left_first, _keep_within, state)
 
 
 # Depth-first stacks never hold more than two nodes per level of a tree.

@@ -95,21 +95,21 @@ def _neighbour_edges(a, b, tree, da, db, order, internal_p, inv_scale, cap, k, w
 
 
 @numba.njit(cache=True)
-def _cannot_violate(box, node, state):
+def _cannot_violate(box, node, count, state):
     """``_price``: no pair of row ``i`` with a point in the node's box is violated (its
     cost's lower bound reaches the largest ``w`` inside, or sending both points to the
     diagonal costs no more)."""
-    a, i, _, da, _, u, _, w_max, db_max, _, _, _, _, order, _, inv_scale, cap, tol = state
+    a, i, _, da, _, u, _, w_max, db_max, _, _, _, order, _, inv_scale, cap, tol = state
     lower = cost(box_gap(box, node, a[i, 0], a[i, 1]), order, inv_scale, cap)
     return lower - u[i] - w_max[node] >= -tol or lower >= min(da[i] + db_max[node], cap)
 
 
 @numba.njit(cache=True)
-def _violated(order_, s, e, state):
+def _violated(order_, s, e, count, state):
     """``_price``: append the violated pairs of row ``i`` with the leaf's points that
     the sparse problem does not hold, with their reduced costs."""
-    a, i, b, da, db, u, v, _, _, present, found_j, found_r, count = state[0:13]
-    order, internal_p, inv_scale, cap, tol = state[13:18]
+    a, i, b, da, db, u, v, _, _, present, found_j, found_r = state[0:12]
+    order, internal_p, inv_scale, cap, tol = state[12:17]
     for r in range(s, e):
         j = order_[r]
         if present[j]:
@@ -117,9 +117,10 @@ def _violated(order_, s, e, state):
         c = pair_cost(a, i, b, j, order, internal_p, inv_scale, cap)
         reduced = c - db[j] - u[i] - v[j]
         if reduced < -tol and c < min(da[i] + db[j], cap):
-            found_j[count[0]] = j
-            found_r[count[0]] = reduced
-            count[0] += 1
+            found_j[count] = j
+            found_r[count] = reduced
+            count += 1
+    return count
 
 
 @numba.njit(cache=True)
@@ -145,11 +146,9 @@ def _price(a, b, tree, da, db, u, v, ptr, cols, order, internal_p, inv_scale, ca
     for i in range(n):
         for f in range(ptr[i], ptr[i + 1] - 1):
             present[cols[f]] = True
-        found = np.zeros(1, np.int64)
-        state = (a, i, b, da, db, u, v, w_max, db_max, present, found_j, found_r, found)
+        state = (a, i, b, da, db, u, v, w_max, db_max, present, found_j, found_r)
         settings = (order, internal_p, inv_scale, cap, tol)
-        depth_first(tree, stack, _cannot_violate, right_first, _violated, state + settings)
-        count = found[0]
+        count = depth_first(tree, stack, _cannot_violate, right_first, _violated, state + settings)
         for f in range(ptr[i], ptr[i + 1] - 1):
             present[cols[f]] = False
         if count > k:
