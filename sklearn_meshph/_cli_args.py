@@ -27,16 +27,16 @@ _EPILOG = """\
 the pipeline: --preset picks one of PRESETS (make_mesh_distance); --eigen-index,
 --laplacian, --normalization, --signature, --n-scales and --n-eigenpairs override its
 eigen stage when given; --set step__param=value sets any parameter (set_params), e.g.
---set distance__weights='{"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0.5}'. The eigen
-stage learns nothing and runs once for all samples (cached in --memory when given);
-everything after it is fitted on the training folds only, fold by fold.
+--set distance__weights='{"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0.5}'. The stages
+that learn nothing (eigen, persistence) run once for all samples (the eigen stage cached
+in --memory when given); everything else is fitted on each fold's training samples only.
 
 files written to --output (created if needed; also with --no-plots):
   distances.npy    full (n, n) distance matrix (numpy.load), the pipeline fitted on
                    all samples (not the cross-validated models)
   diagrams.npz     sample_<i>_diagram_<k>: (m, 2) (birth, death) arrays, death inf for
                    essential classes; filenames, labels, target_names, diagram_names
-                   (presets that compute persistence diagrams in one step only)
+                   (only for presets that compute persistence diagrams)
   predictions.csv  columns: index, file, true label, predicted label, fold
   summary.json     version, source, preset, pipeline (every parameter), settings,
                    n_samples, class_names, class_counts, skipped, accuracy (per_fold,
@@ -97,7 +97,14 @@ def _parse_assignment(text: str) -> tuple[str, object]:
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Defaults in the help, and the epilog's table kept as written."""
+    """Defaults in the help (unless the help says it, or there is none), and the
+    epilog's table kept as written."""
+
+    def _get_help_string(self, action):
+        nothing = action.default is None or action.default is False or action.default == []
+        if nothing or "default:" in (action.help or ""):
+            return action.help
+        return super()._get_help_string(action)
 
 
 def _eigen_option(parser, flag, help_text, **kwargs) -> None:
