@@ -236,6 +236,15 @@ def test_stray_points_are_other_components_and_change_nothing(shape_clouds):
             LaplacianEigenTransformer(components="error").fit_transform([cloud])
 
 
+def test_a_stray_point_is_warned_about_whatever_its_share(shape_clouds):
+    clouds, _, stray, _ = shape_clouds
+    with pytest.warns(MeshCleaningWarning, match=r"sample 1: .* of which 1 far points"):
+        LaplacianEigenTransformer(eigen_index=1).fit_transform([clouds[0], stray])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshCleaningWarning)  # a clean cloud: no warning
+        LaplacianEigenTransformer(eigen_index=1).fit_transform([clouds[0]])
+
+
 def test_uneven_density_is_not_taken_for_far_points(shape_clouds):
     # A sixteenth of the points on one half: still one component, nothing dropped.
     cloud = shape_clouds[0][1]

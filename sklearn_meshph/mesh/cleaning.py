@@ -65,6 +65,10 @@ class CleaningReport:
         Share of the vertices (after welding) dropped, unreferenced ones included.
     area_share : float
         Share of the surface area dropped (degenerate and repeated faces add none).
+    n_far_points : int
+        Points of a point cloud dropped for lying far from the rest for the cloud's own
+        sampling (stray points, small far clusters; counted among the other components).
+        Always warned about, whatever their share: an outlier is a fact about the data.
     """
 
     n_input_vertices: int
@@ -77,6 +81,7 @@ class CleaningReport:
     n_component_faces: int
     vertex_share: float
     area_share: float
+    n_far_points: int = 0
 
     @property
     def dropped(self) -> bool:
@@ -90,8 +95,13 @@ class CleaningReport:
 
     @property
     def significant(self) -> bool:
-        """Whether more than :data:`LOSS_THRESHOLD` of the vertices or area was dropped."""
-        return self.vertex_share > LOSS_THRESHOLD or self.area_share > LOSS_THRESHOLD
+        """Whether more than :data:`LOSS_THRESHOLD` of the vertices or area was dropped,
+        or any far point of a cloud."""
+        return (
+            self.vertex_share > LOSS_THRESHOLD
+            or self.area_share > LOSS_THRESHOLD
+            or self.n_far_points > 0
+        )
 
     def message(self, place: str = "mesh") -> str:
         """A sentence naming ``place`` and what was dropped, for a warning."""
@@ -103,6 +113,11 @@ class CleaningReport:
             f"{self.n_unreferenced_vertices} unreferenced vertices, "
             f"{self.n_other_components} other components "
             f"({self.n_component_vertices} vertices, {self.n_component_faces} faces)"
+            + (
+                f", of which {self.n_far_points} far points (outliers for the cloud's sampling)"
+                if self.n_far_points
+                else ""
+            )
         )
 
 

@@ -168,6 +168,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
         n_component_faces=0,
         vertex_share=(len(distinct) - n_kept) / len(distinct),
         area_share=area_share,
+        n_far_points=int(np.count_nonzero(~near)),
     )
     clean = CleanMesh(
         vertices=np.ascontiguousarray(points[vertex_indices]),
