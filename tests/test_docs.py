@@ -1,9 +1,12 @@
 """The user guide and the API reference build without a warning, and the code blocks
 of README.md and docs/*.md run as written."""
 
+import contextlib
 import json
+import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -75,7 +78,7 @@ _BLOCK = re.compile(
     r"(?:<!-- skip-snippet: (?P<skip>[^\n]*?) -->\n)?^```python\n(?P<code>.*?)^```$",
     re.S | re.M,
 )
-SNIPPET_TIMEOUT = 120.0  # seconds per block; each takes a few
+SNIPPET_TIMEOUT = 300.0  # seconds per block, against deadlocks: each takes seconds
 
 
 def _snippets():
@@ -139,19 +142,31 @@ for name, code, folder in json.loads(sys.argv[1]):
 """
 
 
-def _run_snippets(jobs):
+def _run_snippets(jobs, folder):
     """``{name: error or None}`` for ``jobs`` (name, code, folder); after a snippet that
-    killed the interpreter (timeout, crash), the others run in a new one."""
+    killed the interpreter (timeout, crash), the others run in a new one. The runner
+    writes to a file and runs in a session of its own, killed as a whole at the end:
+    worker processes a snippet left behind can neither block nor outlive the test."""
     errors = {}
     while jobs:
-        run = subprocess.run(
-            [sys.executable, "-c", _SNIPPET_RUNNER, json.dumps(jobs), str(SNIPPET_TIMEOUT)],
-            capture_output=True,
-            text=True,
-            timeout=SNIPPET_TIMEOUT * len(jobs) + 60,
-        )
+        out, err = folder / "stdout", folder / "stderr"
+        with out.open("w") as stdout, err.open("w") as stderr:
+            runner = subprocess.Popen(
+                [sys.executable, "-c", _SNIPPET_RUNNER, json.dumps(jobs), str(SNIPPET_TIMEOUT)],
+                stdout=stdout,
+                stderr=stderr,
+                start_new_session=True,
+            )
+            try:
+                runner.wait(timeout=SNIPPET_TIMEOUT * len(jobs) + 60)
+            except subprocess.TimeoutExpired:
+                pass
+            finally:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(runner.pid, signal.SIGKILL)
+                runner.wait()
         started = None
-        for line in run.stdout.splitlines():
+        for line in out.read_text().splitlines():
             if line.startswith('{"name"'):
                 record = json.loads(line)
                 if record.get("started"):
@@ -160,12 +175,12 @@ def _run_snippets(jobs):
                     errors[record["name"]], started = record["error"], None
         if started is not None:
             errors[started] = (
-                f"the interpreter died (exit {run.returncode}; a timeout after "
-                f"{SNIPPET_TIMEOUT:g} s prints the traceback):\n{run.stderr[-3000:]}"
+                f"the interpreter died (exit {runner.returncode}; a timeout after "
+                f"{SNIPPET_TIMEOUT:g} s prints the traceback):\n{err.read_text()[-3000:]}"
             )
         jobs = [job for job in jobs if job[0] not in errors]
         if started is None and jobs:  # died before reporting any of them
-            errors.update({job[0]: run.stderr[-3000:] or "not run" for job in jobs})
+            errors.update({job[0]: err.read_text()[-3000:] or "not run" for job in jobs})
             break
     return errors
 
@@ -187,7 +202,7 @@ def snippet_errors(tmp_path_factory):
             skipped[name] = str(reason)
             continue
         jobs.append((name, code, str(folder)))
-    return _run_snippets(jobs), skipped
+    return _run_snippets(jobs, tmp_path_factory.mktemp("runner")), skipped
 
 
 def test_the_pages_have_snippets():
