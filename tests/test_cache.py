@@ -23,6 +23,7 @@ MESH = irregular_ellipsoid(2, seed=4)
 RECORDED = {
     1: "e46d60da681850581c2406ff48ad1e93ec6094adfeb7a09c8423a8fac8825a8f",
     2: "767e81a128a96ef187d504e515714c98a2d8b1099e2a0ee5b9b8a1c99f5984d7",
+    3: "ca5522924aa1812fca0d9f5116d0567f540c06e788d7b89ec323fd03cb90bd11",
 }
 
 
