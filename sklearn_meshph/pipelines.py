@@ -21,12 +21,10 @@ from .spectral.cache import cache_of
 
 __all__ = ["PRESETS", "all_registries", "make_mesh_distance"]
 
-# The extended-persistence diagrams of the default, by kind, and their weights.
-_KINDS = {
-    "ord1": ("superlevel H0 (saddle, max)", 1.0),
-    "ext0": ("(min, max)", 0.5),
-    "ext1": ("essential H1", 1.0),
-}
+# The extended-persistence diagrams of the default (ids of LowerStarPersistence's parts:
+# the superlevel pairs (saddle, max), the components' ranges, the essential H1 of closed
+# surfaces) and their weights.
+_KINDS = {"ord1": 1.0, "ext0": 0.5, "ext1": 1.0}
 _DNA_WEIGHT = 0.5
 _EIGENPAIRS = 50
 _SCALES = 5
@@ -45,7 +43,7 @@ def _default(common):
                     (
                         "persistence",
                         LowerStarPersistence(
-                            filtration="extended", parts=(name,), n_jobs=n_jobs, verbose=verbose
+                            filtration="extended", parts=(kind,), n_jobs=n_jobs, verbose=verbose
                         ),
                     ),
                     (
@@ -62,7 +60,7 @@ def _default(common):
                 ]
             ),
         )
-        for kind, (name, _) in _KINDS.items()
+        for kind in _KINDS
     ]
     parts.append(
         (
@@ -75,7 +73,7 @@ def _default(common):
             ),
         )
     )
-    weights = {kind: weight for kind, (_, weight) in _KINDS.items()} | {"dna": _DNA_WEIGHT}
+    weights = _KINDS | {"dna": _DNA_WEIGHT}
     return eigen, CombinedDistance(parts, weights=weights)
 
 
