@@ -95,14 +95,20 @@ SNIPPETS = _snippets()
 
 
 def _watertight_subset(folder):
-    """The folder ``watertight_dev`` the snippets read: 3 of its classes, 5 meshes each
-    (linked from the shared data), so that a snippet takes seconds, not a minute."""
+    """The folder ``watertight_dev`` the snippets read: the 5 smallest meshes of each of
+    its 2 classes of smallest such meshes (linked from the shared data), so that a
+    snippet takes seconds, not a minute."""
     source = DATA_DIR / "watertight_dev"
     if not source.is_dir():
         pytest.skip(f"needs the Watertight data at {source} (set SKLEARN_MESHPH_DATA)")
-    for label in sorted(p for p in source.iterdir() if p.is_dir())[:3]:
+    smallest = {
+        label: sorted(label.iterdir(), key=lambda p: (p.stat().st_size, p.name))[:5]
+        for label in source.iterdir()
+        if label.is_dir()
+    }
+    for label in sorted(smallest, key=lambda c: sum(p.stat().st_size for p in smallest[c]))[:2]:
         (folder / "watertight_dev" / label.name).mkdir(parents=True)
-        for path in sorted(label.iterdir())[:5]:
+        for path in smallest[label]:
             (folder / "watertight_dev" / label.name / path.name).symlink_to(path)
 
 
