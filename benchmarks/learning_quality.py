@@ -109,13 +109,13 @@ def configurations(memory, n_jobs):
             make_pipeline(ShapeDNA(n_eigenpairs=50), FeatureDistance()),
         ),
         "eigenfunctions 1-5 alone, extended, W1": alone(
-            "eigenfunctions", n_jobs, memory, eigen_index=(1, 2, 3, 4, 5), n_eigenpairs=50
+            "eigenfunctions", n_jobs, memory, eigen_index=(1, 2, 3, 4, 5), n_eigenpairs=56
         ),
-        "HKS x5 alone, extended, W1": alone("hks", n_jobs, memory, n_eigenpairs=50, n_scales=5),
+        "HKS x5 alone, extended, W1": alone("hks", n_jobs, memory, n_eigenpairs=56, n_scales=5),
         "log-HKS x5 alone, extended, W1": alone(
-            "log-hks", n_jobs, memory, n_eigenpairs=50, n_scales=5
+            "log-hks", n_jobs, memory, n_eigenpairs=56, n_scales=5
         ),
-        "WKS x5 alone, extended, W1": alone("wks", n_jobs, memory, n_eigenpairs=50, n_scales=5),
+        "WKS x5 alone, extended, W1": alone("wks", n_jobs, memory, n_eigenpairs=56, n_scales=5),
         "default without Shape-DNA": split(without_dna),
         "default without essential H1": split(without_ext1),
     }
