@@ -52,10 +52,10 @@ def cotangent_laplacian(
 
     Notes
     -----
-    Barycentric and Voronoi lumping differ per vertex by up to 18% on irregular meshes
-    and move eigenvalues in the fourth digit; barycentric lumping is positive on every
-    mesh (Voronoi areas need a fix-up on obtuse triangles) and matches lapy, potpourri3d
-    and robust-laplacian.
+    Barycentric and Voronoi lumping differ per vertex on irregular meshes but barely
+    move the eigenvalues (measured in the eigenfunctions guide); barycentric lumping is
+    positive on every mesh (Voronoi areas need a fix-up on obtuse triangles) and matches
+    lapy, potpourri3d and robust-laplacian.
 
     Examples
     --------
