@@ -42,7 +42,7 @@ class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEst
     The vector counterpart of :class:`DiagramDistance`: ``fit`` stores the rows of
     ``X``, ``transform(X)`` returns the ``(len(X), n_fitted)`` distances to them, ready
     for ``KNeighborsClassifier(metric="precomputed")`` or
-    ``TSNE(metric="precomputed")``.
+    ``TSNE(metric="precomputed", init="random")``.
 
     Parameters
     ----------
@@ -189,7 +189,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     (one eigensolve per mesh serves all parts). Like :class:`~sklearn.pipeline.FeatureUnion`,
     but the parts' outputs are added, not concatenated, so the result is again a
     distance matrix for ``KNeighborsClassifier(metric="precomputed")`` or
-    ``TSNE(metric="precomputed")``.
+    ``TSNE(metric="precomputed", init="random")``.
 
     Parameters
     ----------

@@ -193,7 +193,7 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
           and the Shape-DNA spectrum of the first 50 eigenpairs added with weights 1,
           0.5, 1 and 0.5 after median normalization (:class:`CombinedDistance`).
         - ``"eigenfunctions"``: the three estimators at their own defaults
-          (eigenfunctions 1-3, version 0.1's default); ``"0.1"``, its former name, is
+          (eigenfunctions 1-3, version 0.1's pipeline); ``"0.1"``, its former name, is
           accepted with a ``FutureWarning``.
         - ``"paper"``: the paper's literal setting.
         - ``"shape-dna"``: the spectral baseline.

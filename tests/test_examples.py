@@ -34,7 +34,7 @@ def check_grid_search(namespace, out, folder):
 
 def check_pipeline(namespace, out, folder):
     default, paper = printed_numbers(out)
-    assert out.startswith("default: ") and "paper's literal configuration: " in out
+    assert out.startswith("eigenfunction pipeline: ") and "paper's literal configuration: " in out
     assert paper == round(namespace["scores"].mean(), 2)
     assert 0.8 <= default <= 1.0 and 0.0 <= paper <= 1.0
 
