@@ -5,9 +5,10 @@
 For each configuration: 5-fold stratified and leave-one-out 1-NN accuracy from the
 diagram distance matrix, time per stage, and a t-SNE picture. Configurations: the paper's
 literal one (graph Laplacian, unit-norm Fiedler vector, sublevel H0, bottleneck), the
-the eigenfunction pipeline (the estimators' own defaults), the best one found, and a Shape-DNA baseline (first non-zero
-eigenvalues at unit area, Euclidean). A last table checks invariance: rescaled, rotated
-and subdivided copies of every mesh classified by a model fitted on the originals.
+eigenfunction pipeline (the estimators' own defaults), the best one found, and a
+Shape-DNA baseline (first non-zero eigenvalues at unit area, Euclidean). A last table
+checks invariance: rescaled, rotated and subdivided copies of every mesh classified by
+a model fitted on the originals.
 """
 
 from __future__ import annotations
