@@ -96,6 +96,7 @@ def main() -> int:
         install, job = split_install(first)
         t_install = timed(install, clone)
         t_job = timed(job, clone)
+        first_run = job_timings(clone / "meshph-output")
         t_again = timed(job, clone)
         rows.append(
             (
@@ -125,6 +126,7 @@ def main() -> int:
             )
             t_cold = timed(command, clone)
             cold = job_timings(output)
+            accuracy = json.loads((output / "summary.json").read_text())["accuracy"]
             t_warm = timed(command, clone)
             rows.append(
                 (
@@ -134,11 +136,18 @@ def main() -> int:
                     f"{t_warm:.0f} s (warm eigen cache)",
                 )
             )
-            print("\nwatertight_dev, empty eigen cache: seconds per stage (and per mesh)")
+            print(
+                f"\nwatertight_dev: 5-fold accuracy {accuracy['mean']:.3f} "
+                f"(+/- {accuracy['std']:.3f})"
+            )
+            print("watertight_dev, empty eigen cache: seconds per stage (and per mesh)")
             for stage, seconds in cold.items():
                 print(f"  {stage:<20}{seconds:8.2f}  ({1000 * seconds / 200:6.0f} ms / mesh)")
         else:
             print(f"{folder} not found: the Watertight rows are skipped", file=sys.stderr)
+    print("\nbuilt-in shapes, first run (numba compiles): seconds per stage")
+    for stage, seconds in first_run.items():
+        print(f"  {stage:<20}{seconds:8.2f}")
     print("\n| command | first run | later runs |\n|---|---|---|")
     for row in rows:
         print("| " + " | ".join(row) + " |")
