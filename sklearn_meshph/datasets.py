@@ -5,16 +5,16 @@ from __future__ import annotations
 
 import os
 import warnings
+from functools import partial
 from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
 import trimesh
-from joblib import delayed
 from sklearn.utils import Bunch, check_random_state
 
 from ._param_validation import Interval, Options, validate_params
-from ._progress import parallel, track
+from ._progress import map_samples
 from .mesh.reading import COMPRESSIONS
 from .mesh.validation import check_mesh
 from .pointcloud.reading import POINT_CLOUD_FORMATS, read_sample_file
@@ -51,6 +51,12 @@ SAMPLE_EXTENSIONS = MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS
 
 class SkippedFilesWarning(UserWarning):
     """:func:`load_mesh_folder` skipped files it could not read (``on_error="skip"``)."""
+
+
+def _read_item(item, reader):
+    """``reader`` on the ``(position, path)`` of one file, naming it ``sample K``."""
+    k, path = item
+    return reader(path, f"sample {k}")
 
 
 def _read_or_error(path, place: str):
@@ -172,14 +178,12 @@ def load_mesh_folder(
     skipped = []
     if load:
         reader = read_sample_file if on_error == "raise" else _read_or_error
-        jobs = (delayed(reader)(f, f"sample {k}") for k, f in enumerate(filenames))
-        data = list(
-            track(
-                parallel(n_jobs)(jobs),
-                total=len(filenames),
-                desc="reading files",
-                verbose=verbose,
-            )
+        data = map_samples(
+            partial(_read_item, reader=reader),
+            enumerate(filenames),
+            n_jobs=n_jobs,
+            desc="reading files",
+            verbose=verbose,
         )
         skipped = [(str(f), _reason(x)) for f, x in zip(filenames, data, strict=True) if _bad(x)]
         if len(skipped) == len(data):

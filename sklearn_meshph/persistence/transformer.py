@@ -3,14 +3,14 @@ diagrams."""
 
 from __future__ import annotations
 
+from functools import partial
 from numbers import Integral, Real
 
 import numpy as np
-from joblib import delayed
 
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
-from .._progress import parallel, track
+from .._progress import map_samples
 from ..inputs import check_input
 from ..mesh.graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
@@ -51,7 +51,8 @@ def _complex_adjacency(faces, edges, n_vertices):
     return edge_adjacency(edges, n_vertices)
 
 
-def _diagrams_one(sample, index, *, filtration, essential, min_persistence, keep):
+def _diagrams_one(item, *, filtration, essential, min_persistence, keep):
+    index, sample = item
     faces, edges, n_vertices, values = _sample_arrays(sample, index)
     adjacency = _complex_adjacency(faces, edges, n_vertices)
     # Essential H1 needs a closed surface of triangles and nothing else: a point cloud
@@ -237,18 +238,16 @@ class LowerStarPersistence(SampleTransformer):
         self._check_params()
         samples = self._check_samples(X)
         keep = self._keep()
-        results = parallel(self.n_jobs)(
-            delayed(_diagrams_one)(
-                sample,
-                i,
-                filtration=self.filtration,
-                essential=self.essential,
-                min_persistence=float(self.min_persistence),
-                keep=keep,
-            )
-            for i, sample in enumerate(samples)
+        work = partial(
+            _diagrams_one,
+            filtration=self.filtration,
+            essential=self.essential,
+            min_persistence=float(self.min_persistence),
+            keep=keep,
         )
-        return list(track(results, total=len(samples), desc="persistence", verbose=self.verbose))
+        return map_samples(
+            work, enumerate(samples), n_jobs=self.n_jobs, desc="persistence", verbose=self.verbose
+        )
 
     def diagram_names(self, n_functions: int = 1) -> list[str]:
         """Names of the diagrams of one sample, in output order.

@@ -6,15 +6,15 @@ from __future__ import annotations
 import os
 import warnings
 from dataclasses import asdict
+from functools import partial
 from numbers import Integral
 
 import numpy as np
-from joblib import delayed
 from sklearn.utils import check_random_state
 
 from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
-from .._progress import parallel, track
+from .._progress import map_samples
 from .._threads import one_blas_thread
 from ..inputs import check_input
 from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
@@ -87,9 +87,10 @@ def _cached_solve(cache, vertices, faces, settings, n_eigenpairs, seed, index):
     return found
 
 
-def _eigen_one(mesh, index, *, indices, n_eigenpairs, settings, seed, memory):
+def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
     """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
     the solve must cover (none for signatures, which do not depend on the basis)."""
+    index, mesh = item
     with one_blas_thread():
         vertices, faces = check_input(mesh, index=index)
         (clean, values, vectors), complete = solve_covering(
@@ -384,19 +385,21 @@ class LaplacianEigenTransformer(SampleTransformer):
         # Held for the whole parallel call: threads of a threading backend then share
         # one limit instead of setting and restoring it under each other's feet.
         with one_blas_thread():
-            tasks = parallel(self.n_jobs)(
-                delayed(_eigen_one)(
-                    meshes[i],
-                    i,
-                    indices=tracked,
-                    n_eigenpairs=n_solve,
-                    settings=settings,
-                    seed=seed,
-                    memory=memory,
-                )
-                for i in order
+            work = partial(
+                _eigen_one,
+                indices=tracked,
+                n_eigenpairs=n_solve,
+                settings=settings,
+                seed=seed,
+                memory=memory,
             )
-            solved = list(track(tasks, total=len(order), desc="eigensolves", verbose=self.verbose))
+            solved = map_samples(
+                work,
+                [(i, meshes[i]) for i in order],
+                n_jobs=self.n_jobs,
+                desc="eigensolves",
+                verbose=self.verbose,
+            )
         results = [None] * len(meshes)
         for i, result in zip(order, solved, strict=True):
             results[i] = result
