@@ -58,7 +58,10 @@ def timed(command: str, cwd: Path, env=None) -> float:
     with open(cwd / "doc_timings.log", "a") as log:
         log.write(f"\n$ {command}\n")
         log.flush()
-        subprocess.run(command, shell=True, cwd=cwd, check=True, stdout=log, stderr=log, env=env)
+        done = subprocess.run(command, shell=True, cwd=cwd, stdout=log, stderr=log, env=env)
+    if done.returncode:
+        tail = (cwd / "doc_timings.log").read_text().splitlines()[-40:]
+        sys.exit(f"{command!r} failed ({done.returncode}); the end of its log:\n" + "\n".join(tail))
     return time.perf_counter() - start
 
 
