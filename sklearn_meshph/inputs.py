@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .graph.validation import check_graph, is_graph
 from .mesh.validation import check_mesh, where
 from .pointcloud.reading import read_sample_file
 from .pointcloud.validation import check_point_cloud
@@ -59,8 +60,13 @@ def _check_cloud(sample, *, index):
     return check_point_cloud(sample, index=index), None
 
 
+def _check_graph(sample, *, index):
+    return check_graph(sample, index=index), None
+
+
 #: The kinds of sample, asked in this order; the first that recognises a sample wins.
 KINDS = (
+    InputKind("graph", is_graph, _check_graph),
     InputKind("point cloud", is_point_cloud, _check_cloud),
     InputKind("mesh", _is_mesh, check_mesh),
 )

@@ -21,6 +21,7 @@ LAYERS = (
     ("_param_validation", "_registry", "_threads", "_progress", "_base", "_version"),
     ("mesh",),
     ("pointcloud",),
+    ("graph",),
     ("inputs",),
     ("spectral",),
     ("persistence",),

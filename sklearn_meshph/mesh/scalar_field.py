@@ -37,7 +37,8 @@ class ScalarField:
     Parameters
     ----------
     vertices : ndarray of shape (n_vertices, 3)
-        Vertex positions of the (cleaned) mesh the values live on.
+        Vertex positions of the (cleaned) mesh the values live on; ``(n_nodes, 0)`` for
+        a graph (nodes have no coordinates; its edges are ``edges``).
     faces : ndarray of shape (n_faces, 3)
         Triangles, as indices into ``vertices``; ``(0, 3)`` for a point cloud.
     values : ndarray of shape (n_vertices,) or (n_vertices, n_functions)
@@ -92,7 +93,14 @@ class ScalarField:
     column_names: tuple[str, ...] | None = field(default=None, repr=False)
 
     def __post_init__(self):
-        vertices = check_vertices(self.vertices, "ScalarField")
+        vertices = self.vertices
+        if isinstance(vertices, np.ndarray) and vertices.ndim == 2 and vertices.shape[1] == 0:
+            # A graph: nodes without coordinates.
+            if len(vertices) == 0:
+                raise ValueError("ScalarField: the graph has no nodes")
+            vertices = np.zeros(vertices.shape, dtype=np.float64)
+        else:
+            vertices = check_vertices(vertices, "ScalarField")
         faces = check_faces(self.faces, len(vertices), "ScalarField")
         values = check_values(self.values, len(vertices), "ScalarField")
         # Own read-only copies: the validation above must still hold when the compiled
@@ -138,6 +146,12 @@ class ScalarField:
                 f"ScalarField: {len(names)} column_names for {self.n_functions} columns"
             )
         object.__setattr__(self, "column_names", names)
+
+    @property
+    def is_graph(self) -> bool:
+        """Whether the field lives on a graph (``vertices`` of shape ``(n_nodes, 0)``:
+        nodes without coordinates, the graph's edges in ``edges``)."""
+        return self.vertices.shape[1] == 0
 
     @property
     def n_vertices(self) -> int:
