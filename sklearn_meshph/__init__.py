@@ -36,7 +36,7 @@ from .mesh import (
     clean_mesh,
     weld_vertices,
 )
-from .persistence import LowerStarPersistence, lower_star_persistence
+from .persistence import LowerStarPersistence, extended_persistence, lower_star_persistence
 from .pipelines import make_mesh_distance
 from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
@@ -73,6 +73,7 @@ __all__ = [
     "check_point_cloud",
     "clean_mesh",
     "cotangent_laplacian",
+    "extended_persistence",
     "from_giotto",
     "from_gudhi",
     "from_persim",

@@ -1,0 +1,208 @@
+"""Persistence on graphs: extended_persistence against gudhi, hand-computed cases, and
+LowerStarPersistence on graph samples."""
+
+import numpy as np
+import pytest
+
+from sklearn_meshph import extended_persistence
+from sklearn_meshph.graph import Graph
+
+gudhi = pytest.importorskip("gudhi")
+
+KEYS = ("ord0", "rel1", "ext0", "ext1")
+
+
+def sorted_rows(diagram):
+    diagram = np.asarray(diagram, dtype=float).reshape(-1, 2)
+    return diagram[np.lexsort(diagram.T[::-1])]
+
+
+def off_diagonal(diagram, tol):
+    diagram = sorted_rows(diagram)
+    return diagram[np.abs(diagram[:, 1] - diagram[:, 0]) > tol]
+
+
+def gudhi_extended(n_nodes, edges, values):
+    """gudhi's four extended diagrams of the lower-star filtration of a graph."""
+    tree = gudhi.SimplexTree()
+    for v in range(n_nodes):
+        tree.insert([v], float(values[v]))
+    for u, v in edges:
+        tree.insert([int(u), int(v)], float(max(values[u], values[v])))
+    tree.extend_filtration()
+    tree.persistence()
+    parts = tree.extended_persistence()
+    pairs = zip(KEYS, parts, strict=True)
+    return {key: np.array([p for _, p in part]).reshape(-1, 2) for key, part in pairs}
+
+
+def as_graph(n_nodes, edges):
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    return Graph(n_nodes, edges, np.ones(len(edges)))
+
+
+# Random graphs of every shape the oracle test covers ------------------------------------
+
+
+def _pairs(n, p, rng):
+    i, j = np.triu_indices(n, 1)
+    keep = rng.random(len(i)) < p
+    return np.column_stack([i[keep], j[keep]])
+
+
+def _tree(n, rng):
+    return np.array([[rng.integers(0, v), v] for v in range(1, n)], dtype=np.int64).reshape(-1, 2)
+
+
+def _cycle(n, rng):
+    order = rng.permutation(n)
+    return np.column_stack([order, np.roll(order, -1)])
+
+
+def _relabel(edges, n, rng):
+    """The same graph with its nodes renumbered at random."""
+    return rng.permutation(n)[edges] if len(edges) else edges
+
+
+def random_graph(family, rng):
+    """``(n_nodes, edges)`` of one random graph of ``family``."""
+    if family == "tree":
+        n = int(rng.integers(1, 25))
+        return n, _relabel(_tree(n, rng), n, rng)
+    if family == "cycle":
+        n = int(rng.integers(3, 20))
+        return n, _cycle(n, rng)
+    if family == "complete":
+        n = int(rng.integers(2, 16))  # up to 91 cycles: more than one 64-bit word
+        return n, _pairs(n, 1.0, rng)
+    if family == "disconnected":
+        # a few components (trees, cycles, dense pieces) and isolated nodes
+        blocks, offset = [], 0
+        for _ in range(int(rng.integers(2, 5))):
+            size = int(rng.integers(1, 8))
+            kind = rng.integers(0, 3)
+            if kind == 0:
+                block = _tree(size, rng)
+            elif kind == 1 and size >= 3:
+                block = _cycle(size, rng)
+            else:
+                block = _pairs(size, 0.6, rng)
+            blocks.append(block.reshape(-1, 2) + offset)
+            offset += size
+        n = offset + int(rng.integers(0, 3))
+        return n, _relabel(np.vstack(blocks), n, rng)
+    n = int(rng.integers(1, 30))
+    density = {"sparse": 0.08, "medium": 0.25, "dense": 0.6}[family]
+    return n, _pairs(n, density, rng)
+
+
+def random_values(n, rng, ties):
+    if ties:
+        return rng.integers(0, 4, n).astype(float)
+    return rng.normal(size=n)
+
+
+FAMILIES = ("tree", "cycle", "complete", "disconnected", "sparse", "medium", "dense")
+PER_FAMILY = 250  # 7 x 250 = 1750 graphs, half of them with ties
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_gudhi_agrees_on_random_graphs(family):
+    rng = np.random.default_rng(FAMILIES.index(family))
+    for trial in range(PER_FAMILY):
+        n, edges = random_graph(family, rng)
+        values = random_values(n, rng, ties=trial % 2 == 1)
+        graph = as_graph(n, edges)
+        ours = extended_persistence(graph, values)
+        expected = gudhi_extended(n, graph.edges, values)
+        for key in KEYS:
+            # gudhi rescales values internally: its diagonal points may move off by ~1e-16
+            want = off_diagonal(expected[key], 1e-9)
+            got = sorted_rows(ours[key])
+            assert got.shape == want.shape, (family, trial, key, got, want)
+            np.testing.assert_allclose(got, want, atol=1e-9, err_msg=f"{family} {trial} {key}")
+
+
+# Hand-computed cases ---------------------------------------------------------------------
+
+
+def test_cycle_graph_has_one_cycle_from_max_to_min():
+    square = (4, np.array([[0, 1], [1, 2], [2, 3], [0, 3]]))
+    diagrams = extended_persistence(square, [0.0, 3.0, 1.0, 2.0])
+    assert set(diagrams) == set(KEYS)
+    np.testing.assert_array_equal(diagrams["ext1"], [[3.0, 0.0]])
+    np.testing.assert_array_equal(diagrams["ext0"], [[0.0, 3.0]])
+    # the minimum 1 is born at 1 and joins the minimum 0 at 2 (its neighbour of value 2)
+    np.testing.assert_array_equal(diagrams["ord0"], [[1.0, 2.0]])
+    # the maximum 2 is born at 2 (downwards) and joins the maximum 3 at 1
+    np.testing.assert_array_equal(diagrams["rel1"], [[2.0, 1.0]])
+    for diagram in diagrams.values():
+        assert diagram.dtype == np.float64 and diagram.shape[1] == 2
+
+
+def test_tree_has_no_cycles_and_a_path_is_monotone():
+    path = (4, np.array([[0, 1], [1, 2], [2, 3]]))
+    diagrams = extended_persistence(path, [0.0, 1.0, 2.0, 3.0])
+    assert [len(diagrams[key]) for key in KEYS] == [0, 0, 1, 0]
+    np.testing.assert_array_equal(diagrams["ext0"], [[0.0, 3.0]])
+
+
+def test_components_isolated_nodes_and_two_cycles():
+    # a triangle (0, 1, 2), a square (3, 4, 5, 6) and isolated nodes 7 and 8
+    edges = [[0, 1], [1, 2], [0, 2], [3, 4], [4, 5], [5, 6], [3, 6]]
+    values = [1.0, 2.0, 5.0, 0.0, 4.0, 1.0, 3.0, 7.0, -1.0]
+    diagrams = extended_persistence((9, np.array(edges)), values)
+    # isolated nodes are components whose (min, max) has length zero: dropped
+    np.testing.assert_array_equal(sorted_rows(diagrams["ext0"]), [[0.0, 4.0], [1.0, 5.0]])
+    np.testing.assert_array_equal(sorted_rows(diagrams["ext1"]), [[4.0, 0.0], [5.0, 1.0]])
+    np.testing.assert_array_equal(diagrams["ord0"], [[1.0, 3.0]])
+    np.testing.assert_array_equal(diagrams["rel1"], [[3.0, 1.0]])
+
+
+def test_constant_cycle_and_min_persistence():
+    triangle = (3, np.array([[0, 1], [1, 2], [0, 2]]))
+    assert all(len(d) == 0 for d in extended_persistence(triangle, [2.0, 2.0, 2.0]).values())
+    square = (4, np.array([[0, 1], [1, 2], [2, 3], [0, 3]]))
+    kept = extended_persistence(square, [0.0, 3.0, 1.0, 2.0], min_persistence=1.0)
+    # |d - b| > 1 keeps the cycle and the component, not the pairs of length 1
+    assert [len(kept[key]) for key in KEYS] == [0, 0, 1, 1]
+
+
+def test_many_cycles_need_several_words():
+    # the complete graph on 14 nodes has 78 independent cycles (two 64-bit words)
+    n = 14
+    i, j = np.triu_indices(n, 1)
+    values = np.arange(n, dtype=float)
+    diagrams = extended_persistence((n, np.column_stack([i, j])), values)
+    expected = gudhi_extended(n, np.column_stack([i, j]), values)
+    assert len(diagrams["ext1"]) == 78
+    np.testing.assert_allclose(sorted_rows(diagrams["ext1"]), sorted_rows(expected["ext1"]))
+
+
+def test_numbering_of_nodes_does_not_matter():
+    rng = np.random.default_rng(5)
+    n, edges = random_graph("medium", rng)
+    values = random_values(n, rng, ties=False)
+    first = extended_persistence((n, edges), values)
+    perm = rng.permutation(n)
+    renamed = np.empty(n, dtype=np.int64)
+    renamed[perm] = np.arange(n)
+    second = extended_persistence((n, renamed[edges].reshape(-1, 2)), values[perm])
+    for key in KEYS:
+        np.testing.assert_array_equal(sorted_rows(first[key]), sorted_rows(second[key]))
+
+
+def test_bad_input_is_named():
+    square = (4, np.array([[0, 1], [1, 2], [2, 3], [0, 3]]))
+    with pytest.raises(ValueError, match=r"shape \(4,\)"):
+        extended_persistence(square, [0.0, 1.0, 2.0])
+    with pytest.raises(ValueError, match="NaN or inf"):
+        extended_persistence(square, [0.0, np.nan, 2.0, 1.0])
+    with pytest.raises(ValueError, match=r"values must have shape \(4,\), got \(4, 2\)"):
+        extended_persistence(square, np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="min_persistence"):
+        extended_persistence(square, np.zeros(4), min_persistence=-1.0)
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
+    with pytest.raises(TypeError, match="extended_persistence takes a graph"):
+        extended_persistence((vertices, np.array([[0, 1, 2]])), np.zeros(3))
