@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
 from ..mesh import DEGENERATE_SINE
+from ..mesh.graph_laplacians import from_combinatorial, normalized_laplacian, random_walk_laplacian
 from ..mesh.validation import check_vertices
 from ._triangulation import local_delaunay_fans
 from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph, nearest
@@ -165,6 +166,16 @@ CLOUD_LAPLACIANS = Registry(
             _graph,
             "combinatorial graph Laplacian `D - A` of the symmetric 10-nearest-neighbour "
             "graph, `M = I`",
+        ),
+        Option(
+            "normalized",
+            from_combinatorial(normalized_laplacian, _graph),
+            "symmetric normalized Laplacian `I - D^-1/2 A D^-1/2` of the graph of `graph`",
+        ),
+        Option(
+            "random_walk",
+            from_combinatorial(random_walk_laplacian, _graph),
+            "random-walk Laplacian `I - D^-1 A` of the graph of `graph`, `M = D`",
         ),
     ],
 )

@@ -3,8 +3,10 @@
 Each entry is a folder ``<location>/sklearn_meshph_eigen/<key>/`` holding
 ``header.json`` (the format, the key, the cleaning report) and one ``.npy`` file per
 array (the cleaned vertices, faces and index maps, the eigenvalues and eigenvectors).
-A point cloud's entry has no faces (an empty ``(0, 3)`` array): it is accepted only
-where a point cloud is looked up, and a mesh's entry only where a mesh is.
+A point cloud's entry has no faces (an empty ``(0, 3)`` array) and a graph's neither,
+with nodes of no coordinates (``(n, 0)`` vertices): each is accepted only where its kind
+is looked up, and a mesh's entry only where a mesh is. A graph is keyed on its node
+count, edges and edge weights.
 Nothing is unpickled: arrays are read from their ``.npy`` header, whose dtype and shape
 are checked against what the key's mesh allows before a byte of data is read, then
 checked for finiteness and consistency. A corrupt, truncated, oversized or mismatched
@@ -48,7 +50,7 @@ __all__ = [
 ]
 
 #: Bumped whenever the numbers a solve gives may change (cleaning, assembly, solver).
-NUMERICS_VERSION = 3
+NUMERICS_VERSION = 4
 
 #: The modules whose changes must bump NUMERICS_VERSION (relative to the package).
 NUMERICS_FILES = (
@@ -56,6 +58,7 @@ NUMERICS_FILES = (
     "mesh/welding.py",
     "mesh/_geometry.py",
     "mesh/graph.py",
+    "mesh/graph_laplacians.py",
     "spectral/laplacians.py",
     "spectral/_assembly.py",
     "spectral/eigensolver.py",
@@ -213,11 +216,14 @@ class EigenCache:
             digest.update(array.tobytes())
         return digest.hexdigest()
 
-    def load(self, key: str, n_input: int, max_pairs: int, *, points: bool = False):
+    def load(
+        self, key: str, n_input: int, max_pairs: int, *, points: bool = False, graph: bool = False
+    ):
         """``(clean, values, vectors)`` of the entry, or None (missing or unusable).
 
         ``points``: the entry is a point cloud's, whose cleaned sample has no faces
-        (a mesh's has at least one)."""
+        (a mesh's has at least one); ``graph``: a graph's, whose nodes have no
+        coordinates (vertices of shape ``(n, 0)``) and which has no faces."""
         entry = self.folder / key
         try:
             if not stat.S_ISDIR(os.lstat(entry).st_mode):  # a link or a file: not ours
@@ -232,7 +238,7 @@ class EigenCache:
             )
             return None
         try:
-            return self._read(entry, key, n_input, max_pairs, points)
+            return self._read(entry, key, n_input, max_pairs, points, graph)
         except (OSError, ValueError, KeyError, TypeError, RecursionError) as error:
             warnings.warn(
                 f"eigen cache entry {entry} is unusable and is recomputed: {error}",
@@ -241,7 +247,7 @@ class EigenCache:
             )
             return None
 
-    def _read(self, entry: Path, key: str, n_input: int, max_pairs: int, points: bool):
+    def _read(self, entry: Path, key: str, n_input: int, max_pairs: int, points: bool, graph: bool):
         with _open_regular(entry / "header.json") as stream:
             text = stream.read(_MAX_HEADER + 1)
         if len(text) > _MAX_HEADER:
@@ -255,10 +261,11 @@ class EigenCache:
         n = _count(header, "n_vertices")
         k = _count(header, "n_pairs")
         faces_size = _count(header, "n_faces") * 3
-        if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and (faces_size == 0) == points):
+        faceless = points or graph
+        if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and (faces_size == 0) == faceless):
+            kind = "graph" if graph else "point cloud" if points else "mesh"
             raise ValueError(
-                f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces do not fit the "
-                f"{'point cloud' if points else 'mesh'}"
+                f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces do not fit the {kind}"
             )
         vertices = _read_array(entry / "vertices.npy", np.float64, 3 * n, 2)
         faces = _read_array(entry / "faces.npy", np.int64, faces_size, 2)
@@ -267,9 +274,9 @@ class EigenCache:
         values = _read_array(entry / "values.npy", np.float64, k, 1)
         vectors = _read_array(entry / "vectors.npy", np.float64, n * k, 2)
         checks = {
-            "vertices": vertices.shape == (n, 3) and np.isfinite(vertices).all(),
+            "vertices": vertices.shape == (n, 0 if graph else 3) and np.isfinite(vertices).all(),
             "faces": faces.shape == (faces_size // 3, 3)
-            and (points or (faces.min() >= 0 and faces.max() < n)),
+            and (faceless or (faces.min() >= 0 and faces.max() < n)),
             "vertex_indices": indices.shape == (n,)
             and ((indices >= 0) & (indices < n_input)).all(),
             "input_to_kept": to_kept.shape == (n_input,)

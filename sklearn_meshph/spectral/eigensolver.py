@@ -1,8 +1,13 @@
-"""Low eigenpairs of a mesh Laplacian: shift-invert Lanczos on one factorization.
+"""Low eigenpairs of a Laplacian: shift-invert Lanczos on one factorization, or a dense
+solve of small operators.
 
 Eigenpairs come from ARPACK (:func:`scipy.sparse.linalg.eigsh`) in shift-invert mode
 with a small negative shift, so that ``L - sigma M`` is positive definite and factored
-once (:mod:`.factorization`); below a few hundred vertices a dense solver is used.
+once (:mod:`.factorization`). Small operators (below a few hundred vertices or nodes:
+:data:`DENSE_MAX_VERTICES`, :data:`DENSE_MAX_NODES`), requests of nearly every
+eigenpair and ``solver="dense"`` go to LAPACK's dense symmetric eigensolver instead
+(:func:`dense_eigenpairs`). Both give ascending eigenvalues and M-orthonormal
+eigenvectors under one sign rule (:func:`fix_signs`).
 """
 
 from __future__ import annotations
@@ -17,15 +22,35 @@ from scipy.sparse.linalg import ArpackError, eigsh
 
 from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
+from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
 from .factorization import SOLVERS, ShiftInvertOperator
 from .laplacians import LAPLACIANS
 
-__all__ = ["fix_signs", "generalized_eigenpairs", "laplacian_eigenfunctions"]
+__all__ = [
+    "COMPONENTS",
+    "DENSE_LIMIT",
+    "DENSE_MAX_NODES",
+    "DENSE_MAX_VERTICES",
+    "dense_eigenpairs",
+    "fix_signs",
+    "generalized_eigenpairs",
+    "laplacian_eigenfunctions",
+]
 
-# Below this size a dense generalized eigensolver is faster and simpler than ARPACK.
-_DENSE_MAX_VERTICES = 200
+#: The component policies of the eigen stage: cleaning's, and ``"all"``, which keeps
+#: every connected component of a graph (isolated nodes included).
+COMPONENTS = (*COMPONENT_POLICIES, "all")
+
+#: Up to this many vertices ``solver="auto"`` solves a mesh's or a cloud's operator
+#: densely: faster and simpler than ARPACK there.
+DENSE_MAX_VERTICES = 200
+#: Up to this many nodes ``solver="auto"`` solves a graph's operator densely (the
+#: crossover measured by ``benchmarks/bench_graph_spectra.py``).
+DENSE_MAX_NODES = 200
+#: The dense solver holds two ``n x n`` float64 matrices: larger operators are refused.
+DENSE_LIMIT = 12_000
 # Up to this size a dense solve (seconds) replaces an ARPACK run that did not converge.
 _DENSE_FALLBACK_VERTICES = 3000
 # Shift of shift-invert, relative to the typical eigenvalue scale trace(L)/trace(M)/n.
@@ -64,6 +89,35 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
     return vectors
 
 
+def dense_eigenpairs(
+    L: sp.spmatrix, mass: np.ndarray, n_eigenpairs: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n_eigenpairs`` smallest eigenpairs of ``L phi = lambda diag(mass) phi`` by
+    LAPACK, as the standard problem of ``M^-1/2 L M^-1/2`` (``mass`` positive): all of
+    them by divide and conquer, fewer by relatively robust representations. Unsorted
+    signs; eigenvalues ascending. Operators beyond :data:`DENSE_LIMIT` rows are refused
+    with a ``ValueError`` (the matrices would not fit in memory)."""
+    n = L.shape[0]
+    if n > DENSE_LIMIT:
+        gigabytes = 2 * 8 * n * n / 1e9
+        raise ValueError(
+            f"the dense eigensolver needs two {n} x {n} matrices ({gigabytes:.3g} GB), above "
+            f"its limit of {DENSE_LIMIT} rows: ask for fewer eigenpairs than rows, with "
+            "solver='auto'"
+        )
+    inverse_root = 1.0 / np.sqrt(mass)
+    A = L.toarray()
+    A *= inverse_root[:, None]
+    A *= inverse_root[None, :]
+    if n_eigenpairs < n:
+        values, vectors = scipy.linalg.eigh(
+            A, subset_by_index=[0, n_eigenpairs - 1], driver="evr", overwrite_a=True
+        )
+    else:
+        values, vectors = scipy.linalg.eigh(A, driver="evd", overwrite_a=True)
+    return values, vectors * inverse_root[:, None]
+
+
 def generalized_eigenpairs(
     L: sp.spmatrix,
     M: sp.spmatrix,
@@ -72,6 +126,7 @@ def generalized_eigenpairs(
     seed: int = 0,
     points: np.ndarray | None = None,
     solver: str = "auto",
+    dense_max: int = DENSE_MAX_VERTICES,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The ``n_eigenpairs`` smallest eigenpairs of ``L phi = lambda M phi``.
 
@@ -79,7 +134,9 @@ def generalized_eigenpairs(
     :func:`fix_signs`; eigenvalues are ascending. ARPACK's start vector is drawn from
     ``numpy.random.default_rng(seed)``, so results are bitwise reproducible.
     ``points`` (vertex coordinates) give the factorization's fill-reducing order and
-    ``solver`` its backend (:data:`.factorization.SOLVERS`).
+    ``solver`` its backend (:data:`.factorization.SOLVERS`); operators of at most
+    ``dense_max`` rows, requests of all eigenpairs but one or none and
+    ``solver="dense"`` are solved densely (:func:`dense_eigenpairs`).
     """
     n = L.shape[0]
     mass = M.diagonal()
@@ -88,8 +145,9 @@ def generalized_eigenpairs(
     # threads (several times slower on a busy machine).
     with one_blas_thread():
         values = vectors = None
-        if n > _DENSE_MAX_VERTICES and n_eigenpairs < n - 1:
-            sigma = eigen_shift(L, M)
+        sigma = eigen_shift(L, M)
+        # sigma = 0: no edge at all, every eigenvalue 0, which Lanczos cannot separate.
+        if solver != "dense" and n > dense_max and n_eigenpairs < n - 1 and sigma < 0:
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
             # An eigenvalue of a multiplicity beyond the block (many triangles on one
@@ -122,8 +180,7 @@ def generalized_eigenpairs(
                     values, vectors = values[order], vectors[:, order]
                     break
         if values is None:
-            values, vectors = scipy.linalg.eigh(L.toarray(), np.diag(mass))
-            values, vectors = values[:n_eigenpairs], vectors[:, :n_eigenpairs]
+            values, vectors = dense_eigenpairs(L, mass, n_eigenpairs)
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
     values = np.maximum(values, 0.0)
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))
@@ -135,7 +192,7 @@ def generalized_eigenpairs(
         "n_eigenpairs": [Interval(Integral, 1, None, closed="left"), None],
         "n_eigs": [Interval(Integral, 1, None, closed="left"), None],
         "laplacian": [Options(LAPLACIANS)],
-        "components": [Options(COMPONENT_POLICIES)],
+        "components": [Options(COMPONENTS)],
         "weld": ["boolean"],
         "random_state": [Interval(Integral, 0, 2**32 - 1, closed="both")],
         "solver": [Options(SOLVERS)],
@@ -160,27 +217,33 @@ def laplacian_eigenfunctions(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike or point cloud
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike, point cloud or graph
         See :func:`check_mesh`. The mesh is cleaned by :func:`clean_mesh`. A point
         cloud (an ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points, see
         :func:`check_point_cloud`) gets the point-cloud discretization of
         ``laplacian`` (:func:`point_cloud_laplacian` for ``"cotangent"``) after its own
-        cleaning (coincident points merged, one component).
+        cleaning (coincident points merged, one component). A graph (see
+        :func:`check_graph`) gets the graph discretization of ``laplacian`` on its
+        edge weights (not ``"cotangent"``); its rows are the kept nodes.
     n_eigenpairs : int
         Number of eigenpairs, the constant one included: at least 1 and at most the
-        number of kept vertices.
-    laplacian : {"cotangent", "graph"}, default="cotangent"
+        number of kept vertices. ``None`` on a graph: every eigenpair.
+    laplacian : {"cotangent", "graph", "normalized", "random_walk"}, default="cotangent"
         ``"cotangent"`` solves ``L phi = lambda M phi`` with the cotangent stiffness and
-        lumped mass; ``"graph"`` uses the graph Laplacian and ``M = I``.
-    components : {"largest", "error"}, default="largest"
-        Connected-component policy of :func:`clean_mesh`.
+        lumped mass; ``"graph"`` uses the graph Laplacian and ``M = I``,
+        ``"normalized"`` the symmetric normalized one and ``M = I``, ``"random_walk"``
+        ``D - A`` and ``M = D`` (see :data:`LAPLACIANS`).
+    components : {"largest", "error", "all"}, default="largest"
+        Connected-component policy of :func:`clean_mesh`; a graph also takes ``"all"``,
+        every component kept (see :class:`LaplacianEigenTransformer`).
     weld : bool, default=True
         Weld coincident vertices first (see :func:`clean_mesh`); ``False`` keeps the
         vertices as given.
     random_state : int, default=0
         Seed of ARPACK's start vector, in ``[0, 2**32 - 1]``.
-    solver : {"auto", "cholesky", "superlu"}, default="auto"
-        Factorization backend of the shift-invert step (:data:`SOLVERS`).
+    solver : {"auto", "cholesky", "superlu", "dense"}, default="auto"
+        Factorization backend of the shift-invert step, or the dense eigensolver
+        (:data:`SOLVERS`).
     n_eigs : int, optional
         The former name of ``n_eigenpairs`` (a ``FutureWarning``).
 
@@ -190,8 +253,8 @@ def laplacian_eigenfunctions(
         Ascending.
     eigenvectors : ndarray of shape (n_vertices, n_eigenpairs)
         Rows follow the cleaned vertex set (the input's vertices when the mesh needs no
-        cleaning). Columns are M-orthonormal for ``"cotangent"`` and of unit Euclidean
-        norm for ``"graph"``; signs follow the rule of
+        cleaning). Columns are M-orthonormal: of unit Euclidean norm for ``"graph"`` and
+        ``"normalized"``, D-orthonormal for ``"random_walk"``; signs follow the rule of
         :class:`LaplacianEigenTransformer`.
 
     Warns
@@ -218,26 +281,40 @@ def laplacian_eigenfunctions(
             stacklevel=3,
         )
         n_eigenpairs = n_eigs
-    if n_eigenpairs is None:
-        raise TypeError("laplacian_eigenfunctions() needs n_eigenpairs, the number of eigenpairs")
     vertices, faces = check_input(mesh)
-    if faces is None:
-        from .solve import SolveSettings, cloud_eigenpairs  # solve.py builds on this module
+    graph = isinstance(vertices, Graph)
+    if n_eigenpairs is None and not graph:
+        raise TypeError("laplacian_eigenfunctions() needs n_eigenpairs, the number of eigenpairs")
+    # solve.py builds on this module
+    from .solve import (
+        SolveSettings,
+        cloud_eigenpairs,
+        graph_eigenpairs,
+        refuse_all_components,
+        warn_graph_components,
+    )
 
-        settings = SolveSettings(laplacian, "none", components, solver, weld)
+    settings = SolveSettings(laplacian, "none", components, solver, weld)
+    if graph:
+        clean, values, vectors = graph_eigenpairs(
+            vertices, settings, n_eigenpairs or vertices.n_nodes, random_state, None
+        )
+        warn_graph_components(clean.report, "graph", stacklevel=3)
+        n_eigenpairs = n_eigenpairs or len(values)
+    elif faces is None:
         clean, values, vectors = cloud_eigenpairs(
             vertices, settings, n_eigenpairs, random_state, None
         )
         warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
-        kept = len(values)
     else:
+        refuse_all_components(components, None, "mesh")
         clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
         warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
-        kept = len(clean.vertices)
+    kept = len(clean.vertices)
     if n_eigenpairs > kept:
+        what = "nodes" if graph else "vertices" if faces is not None else "points"
         raise ValueError(
-            f"n_eigenpairs must be between 1 and {kept} (the kept "
-            f"{'vertices' if faces is not None else 'points'}), got {n_eigenpairs}"
+            f"n_eigenpairs must be between 1 and {kept} (the kept {what}), got {n_eigenpairs}"
         )
     if faces is None:
         return values, vectors

@@ -10,7 +10,11 @@ one entry in :data:`SOLVERS`:
   matrix), twice the memory: an independent implementation to check against.
 
 ``"auto"`` takes the Cholesky factorization, the faster one at every size measured by
-``benchmarks/bench_factorization.py`` (figures in ``docs/eigenfunctions.md``).
+``benchmarks/bench_factorization.py`` (figures in ``docs/eigenfunctions.md``), and the
+eigensolver solves small operators densely instead (the crossover measured by
+``benchmarks/bench_graph_spectra.py``). ``"dense"`` factors nothing: the eigensolver
+then always solves densely (:func:`.eigensolver.dense_eigenpairs`), every eigenpair at
+once if asked.
 """
 
 from __future__ import annotations
@@ -54,7 +58,11 @@ class SuperLUFactor:
 SOLVERS = Registry(
     "solver",
     [
-        Option("auto", SupernodalCholesky, "the fastest backend: 'cholesky'"),
+        Option(
+            "auto",
+            SupernodalCholesky,
+            "the fastest: the dense eigensolver below a measured size, else 'cholesky'",
+        ),
         Option(
             "cholesky",
             SupernodalCholesky,
@@ -64,6 +72,12 @@ SOLVERS = Registry(
             "superlu",
             SuperLUFactor,
             "SciPy's SuperLU with diagonal pivots (independent check; twice the memory)",
+        ),
+        Option(
+            "dense",
+            None,
+            "no factorization: LAPACK's dense symmetric eigensolver at every size (every "
+            "eigenpair if asked; memory grows as the square of the size)",
         ),
     ],
 )
@@ -88,6 +102,8 @@ def factorize(A: sp.spmatrix, points: np.ndarray | None = None, solver: str = "a
     nested-dissection order; without them reverse Cuthill-McKee is used (more fill).
     """
     backend = SOLVERS[solver].value
+    if backend is None:
+        raise ValueError(f"the {solver!r} solver factors nothing: it is the dense eigensolver")
     A = check_square_finite(A)  # here, before the order is computed, for every backend
     n = A.shape[0]
     if points is not None:

@@ -9,9 +9,18 @@ for the generalized eigenproblem ``L phi = lambda M phi``:
 - ``"graph"``: the combinatorial graph Laplacian ``D - A`` of the mesh edges, with
   ``M = I``. It ignores geometry and is not resolution invariant: its eigenvalues scale
   with the edge count, and unit-norm eigenvectors carry a factor ``1/sqrt(n)``.
+- ``"normalized"``: the symmetric normalized Laplacian ``I - D^-1/2 A D^-1/2`` of the
+  same edges, ``M = I`` (PersLay's operator on graphs);
+- ``"random_walk"``: ``I - D^-1 A``, solved as ``(D - A) phi = lambda D phi``.
+
+The three graph Laplacians are those of :mod:`sklearn_meshph.mesh.graph_laplacians`.
+A graph sample (:class:`sklearn_meshph.graph.validation.Graph`) takes them too, with
+its own edge weights: :data:`GRAPH_LAPLACIANS` holds their discretization
+``graph -> (L, M)``, under the same names; a Laplacian of the surface
+(``"cotangent"``) has none.
 
 A new discretization is a function ``(vertices, faces) -> (L, M)`` and one entry in
-:data:`LAPLACIANS`.
+:data:`LAPLACIANS` (and, if it applies to graphs, one in :data:`GRAPH_LAPLACIANS`).
 """
 
 from __future__ import annotations
@@ -23,11 +32,18 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
+from ..graph.validation import Graph
 from ..mesh.graph import edge_matrix_csr, mesh_edges
+from ..mesh.graph_laplacians import (
+    combinatorial_laplacian,
+    from_combinatorial,
+    normalized_laplacian,
+    random_walk_laplacian,
+)
 from ..mesh.validation import check_faces, check_vertices
 from ._assembly import cotangent_weights
 
-__all__ = ["LAPLACIANS", "cotangent_laplacian", "graph_laplacian"]
+__all__ = ["GRAPH_LAPLACIANS", "LAPLACIANS", "cotangent_laplacian", "graph_laplacian"]
 
 
 def cotangent_laplacian(
@@ -96,13 +112,32 @@ def graph_laplacian(faces: np.ndarray, n_vertices: int) -> tuple[sp.csr_matrix, 
     M : scipy.sparse.dia_matrix
         The identity, so that both Laplacians share one generalized-eigenproblem solver.
     """
-    adjacency = mesh_edges(check_faces(faces, n_vertices), n_vertices)
-    degree = np.asarray(adjacency.sum(axis=1)).ravel()
-    return (sp.diags(degree) - adjacency).tocsr(), sp.identity(n_vertices, format="dia")
+    return combinatorial_laplacian(mesh_edges(check_faces(faces, n_vertices), n_vertices))
 
 
 def _graph(vertices, faces):
     return graph_laplacian(faces, len(vertices))
+
+
+def _of_graph(operator):
+    """``operator`` on a graph sample's weighted adjacency."""
+
+    def discretization(graph: Graph):
+        return operator(graph.adjacency())
+
+    discretization.__doc__ = f"{operator.__name__} of a graph sample"
+    return discretization
+
+
+_NORMALIZED = (
+    "symmetric normalized graph Laplacian `I - D^-1/2 A D^-1/2` of the edges, `M = I` "
+    "(eigenvalues in [0, 2]; an isolated node has `L_ii = 0`); PersLay's operator"
+)
+_RANDOM_WALK = (
+    "random-walk graph Laplacian `I - D^-1 A` of the edges, solved as `(D - A) phi = "
+    "lambda D phi` (`M = D`, D-orthonormal eigenvectors; the normalized Laplacian's "
+    "eigenvalues)"
+)
 
 
 LAPLACIANS = Registry(
@@ -121,5 +156,22 @@ LAPLACIANS = Registry(
             "combinatorial graph Laplacian `D - A` of the edges, `M = I`; depends on the "
             "connectivity only, not resolution invariant (the paper's literal setting)",
         ),
+        Option("normalized", from_combinatorial(normalized_laplacian, _graph), _NORMALIZED),
+        Option("random_walk", from_combinatorial(random_walk_laplacian, _graph), _RANDOM_WALK),
+    ],
+)
+
+#: The discretization ``graph -> (L, M)`` of each Laplacian of :data:`LAPLACIANS` that a
+#: graph sample takes, by the same name, on the graph's weighted adjacency.
+GRAPH_LAPLACIANS = Registry(
+    "laplacian",
+    [
+        Option(
+            "graph",
+            _of_graph(combinatorial_laplacian),
+            "combinatorial graph Laplacian `D - A` of the weighted adjacency, `M = I`",
+        ),
+        Option("normalized", _of_graph(normalized_laplacian), _NORMALIZED),
+        Option("random_walk", _of_graph(random_walk_laplacian), _RANDOM_WALK),
     ],
 )

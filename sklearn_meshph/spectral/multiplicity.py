@@ -67,5 +67,5 @@ def warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -
             f"{close[-1]} agree within a relative {spread:.1e}; relative gap to the next "
             f"distinct one {gap:.2g}); its eigenfunction is not unique",
             RepeatedEigenvalueWarning,
-            stacklevel=4,
+            stacklevel=5,
         )

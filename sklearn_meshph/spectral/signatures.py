@@ -6,7 +6,8 @@ constant one first), ``values`` of shape ``(n_vertices, size)`` and ``names`` a 
 per column (``"heat kernel signature t=0.0312"``), and one entry in :data:`SIGNATURES`:
 
 - ``"hks"``, the heat kernel signature ``sum_k exp(-lambda_k t) phi_k(x)^2`` (Sun,
-  Ovsjanikov and Guibas, 2009) at ``size`` times;
+  Ovsjanikov and Guibas, 2009) at ``size`` times, or at the fixed times ``size`` holds
+  when it is an array (:func:`check_times`; PersLay's ``t = 0.1, 10`` on graphs);
 - ``"log-hks"``, ``log(HKS(x, t) / sum_k exp(-lambda_k t))``: the HKS over its mean on
   the unit-area surface, in log scale, so that every time's column is on the same
   footing;
@@ -29,12 +30,22 @@ import numpy as np
 from .._registry import Option, Registry
 
 __all__ = [
+    "HEAT_SIGNATURES",
+    "MAX_TIME",
+    "MIN_TIME",
     "SIGNATURES",
+    "check_times",
     "heat_kernel_signature",
     "hks_times",
     "wave_kernel_signature",
     "wks_energies",
 ]
+
+#: The signatures that take fixed times (``LaplacianEigenTransformer(times=...)``).
+HEAT_SIGNATURES = ("hks", "log-hks")
+#: The range of fixed times: float64's square-root range, so that ``lambda * t`` is
+#: neither negligible nor overflowing for any eigenvalue within the same range.
+MIN_TIME, MAX_TIME = 1e-150, 1e150
 
 # Log-energy spread of each wave kernel band, in units of the step between energies
 # (Aubry et al. use 6 to 7 steps).
@@ -58,6 +69,31 @@ def hks_times(eigenvalues: np.ndarray, size: int) -> np.ndarray:
     positive = _positive(eigenvalues)
     span = 4.0 * np.log(10.0) / np.array([positive[-1], positive[0]])
     return np.geomspace(span[0], span[1], size) if size > 1 else span[1:]
+
+
+def check_times(times) -> np.ndarray:
+    """Fixed times of a heat signature as a 1-D float64 array: not empty, each finite and
+    within ``[MIN_TIME, MAX_TIME]``; a ``ValueError`` saying what is wrong otherwise."""
+    kind = np.asarray(times).dtype.kind
+    if kind not in "iuf":
+        raise ValueError(f"times must be an array of positive numbers, got {times!r}")
+    array = np.asarray(times, dtype=np.float64)
+    if array.ndim != 1 or array.size == 0:
+        raise ValueError(f"times must be a non-empty 1-D array of times, got shape {array.shape}")
+    bad = ~((array >= MIN_TIME) & (array <= MAX_TIME))  # NaN included
+    if bad.any():
+        raise ValueError(
+            f"times must be finite and between {MIN_TIME:g} and {MAX_TIME:g}, got "
+            f"{array[bad][0]!r} (beyond that range every exp(-lambda t) is 0 or 1 for the "
+            "eigenvalues float64 holds: a signature without information)"
+        )
+    return array
+
+
+def _times(eigenvalues, size) -> np.ndarray:
+    """``size`` times chosen from the eigenvalues, or ``size`` itself if it is an
+    array of fixed times."""
+    return hks_times(eigenvalues, size) if np.ndim(size) == 0 else check_times(size)
 
 
 def heat_kernel_signature(eigenvalues, eigenvectors, times) -> np.ndarray:
@@ -128,7 +164,7 @@ def _labels(name: str, symbol: str, scales) -> tuple[str, ...]:
 
 
 def _hks(eigenvalues, eigenvectors, size):
-    times = hks_times(eigenvalues, size)
+    times = _times(eigenvalues, size)
     hks = heat_kernel_signature(eigenvalues, eigenvectors, times)
     return hks, _labels("heat kernel signature", "t", times)
 
@@ -137,7 +173,7 @@ def _log_hks(eigenvalues, eigenvectors, size):
     """``log(HKS(x, t) / trace(t))``, the heat trace ``sum_k exp(-lambda_k t)`` being the
     HKS's mean over the unit-area surface: each time's column is centred on 0 in log
     scale, so the times weigh alike in a distance."""
-    times = hks_times(eigenvalues, size)
+    times = _times(eigenvalues, size)
     hks = heat_kernel_signature(eigenvalues, eigenvectors, times)
     trace = np.exp(-np.outer(np.asarray(eigenvalues, dtype=np.float64), times)).sum(axis=0)
     log_hks = np.log(np.maximum(hks, np.finfo(float).tiny) / trace)

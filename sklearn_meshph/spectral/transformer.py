@@ -1,5 +1,5 @@
-"""LaplacianEigenTransformer: meshes and point clouds to Laplacian eigenfunctions, one
-cached solve each."""
+"""LaplacianEigenTransformer: meshes, point clouds and graphs to Laplacian eigenfunctions
+or signatures, one cached solve each."""
 
 from __future__ import annotations
 
@@ -16,17 +16,26 @@ from .._base import SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
 from .._progress import map_samples
 from .._threads import one_blas_thread
+from ..graph.validation import Graph
 from ..inputs import check_input
-from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
+from ..mesh.cleaning import describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
 from ..pointcloud.graph import knn_graph
 from .cache import EigenCache, cache_of
+from .eigensolver import COMPONENTS
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .multiplicity import solve_covering, warn_if_repeated
 from .quality import warn_if_needles
-from .signatures import SIGNATURES
-from .solve import SolveSettings, cloud_eigenpairs, mesh_eigenpairs
+from .signatures import HEAT_SIGNATURES, SIGNATURES, check_times
+from .solve import (
+    SolveSettings,
+    cloud_eigenpairs,
+    graph_eigenpairs,
+    kept_edges,
+    mesh_eigenpairs,
+    warn_graph_components,
+)
 
 __all__ = ["ConstantEigenfunctionWarning", "LaplacianEigenTransformer"]
 
@@ -50,6 +59,14 @@ def _size_hint(mesh) -> int:
             return os.path.getsize(mesh)
         if isinstance(mesh, np.ndarray):  # a point cloud
             return len(mesh)
+        if isinstance(mesh, Graph):
+            return mesh.n_nodes
+        if hasattr(mesh, "shape"):  # a sparse adjacency matrix
+            return mesh.shape[0]
+        if isinstance(mesh, tuple | list) and isinstance(mesh[0], Integral):  # (n_nodes, edges)
+            return int(mesh[0])
+        if hasattr(mesh, "number_of_nodes"):  # a networkx graph
+            return mesh.number_of_nodes()
         return len(mesh.vertices if hasattr(mesh, "vertices") else mesh[0])
     except (OSError, TypeError, IndexError, KeyError):
         return 0  # invalid input: check_input reports it in the worker
@@ -65,22 +82,28 @@ _NO_FACES = np.empty((0, 3), dtype=np.int64)
 
 
 def _cached_solve(cache, vertices, faces, settings, n_eigenpairs, seed, index):
-    """One sample's solve through the cache; ``faces`` is None for a point cloud."""
-    points = faces is None
-    solve = cloud_eigenpairs if points else mesh_eigenpairs
-    inputs = (vertices,) if points else (vertices, faces)
+    """One sample's solve through the cache; ``faces`` is None for a point cloud or a
+    graph (``vertices`` then a :class:`Graph`)."""
+    graph = isinstance(vertices, Graph)
+    points = faces is None and not graph
+    solve = graph_eigenpairs if graph else cloud_eigenpairs if points else mesh_eigenpairs
+    inputs = (vertices,) if faces is None else (vertices, faces)
     arguments = (*inputs, settings, n_eigenpairs, seed, index)
     if cache is None:
         return solve(*arguments)
     if not isinstance(cache, EigenCache):  # the user's own caching object
         return cache.cache(solve, ignore=["index"])(*arguments)
-    # A cloud is keyed with no faces, which no mesh has: the two kinds never collide.
-    key = cache.key(
-        vertices,
-        _NO_FACES if points else faces,
-        {**asdict(settings), "n_eigenpairs": n_eigenpairs, "seed": seed},
-    )
-    found = cache.load(key, len(vertices), n_eigenpairs, points=points)
+    keyed = {**asdict(settings), "n_eigenpairs": n_eigenpairs, "seed": seed}
+    if graph:
+        # Edges (m, 2) and weights, with the node count among the settings: no mesh or
+        # cloud has either, so the kinds never collide.
+        key = cache.key(vertices.weights, vertices.edges, {**keyed, "nodes": vertices.n_nodes})
+        n_input = vertices.n_nodes
+    else:
+        # A cloud is keyed with no faces, which no mesh has.
+        key = cache.key(vertices, _NO_FACES if points else faces, keyed)
+        n_input = len(vertices)
+    found = cache.load(key, n_input, n_eigenpairs, points=points, graph=graph)
     if found is None:
         found = solve(*arguments)
         cache.store(key, found)
@@ -88,24 +111,32 @@ def _cached_solve(cache, vertices, faces, settings, n_eigenpairs, seed, index):
 
 
 def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
-    """Clean and solve one mesh; ``indices`` are the eigenfunctions whose multiplicity
-    the solve must cover (none for signatures, which do not depend on the basis)."""
+    """Clean and solve one sample; ``indices`` are the eigenfunctions whose multiplicity
+    the solve must cover (none for signatures, which do not depend on the basis).
+    ``n_eigenpairs=None``: every eigenpair of a graph (others get the signatures'
+    default). Returns the kept graph's edges too (None for a mesh or a cloud)."""
     index, mesh = item
     with one_blas_thread():
         vertices, faces = check_input(mesh, index=index)
+        graph = isinstance(vertices, Graph)
+        if n_eigenpairs is None and graph:
+            n_eigenpairs = vertices.n_nodes
+        else:
+            n_eigenpairs = _block(n_eigenpairs or _SIGNATURE_EIGENPAIRS)
         (clean, values, vectors), complete = solve_covering(
             lambda n: _cached_solve(memory, vertices, faces, settings, n, seed, index),
-            _block(n_eigenpairs),
+            n_eigenpairs,
             indices,
             _EIGENPAIR_BLOCK,
         )
+    edges = kept_edges(vertices, clean.input_to_kept) if graph else None
     # The cleaning report travels back with the results: the parent warns, not the
     # worker, whose warnings joblib would not show.
-    return clean, values, vectors, complete
+    return clean, values, vectors, complete, edges
 
 
 class LaplacianEigenTransformer(SampleTransformer):
-    """Compute a Laplacian eigenfunction on each mesh or point cloud.
+    """Compute a Laplacian eigenfunction or signature on each mesh, point cloud or graph.
 
     The first stage of the mesh-learning pipeline: each mesh becomes a
     :class:`ScalarField` holding the requested eigenfunctions of its Laplace-Beltrami
@@ -123,6 +154,16 @@ class LaplacianEigenTransformer(SampleTransformer):
     field has no faces and the symmetric 10-nearest-neighbour graph as ``edges``: the
     complex :class:`LowerStarPersistence` filters.
 
+    Graphs (a :class:`~sklearn_meshph.graph.validation.Graph`, an ``(n_nodes, edges)``
+    pair, a sparse adjacency matrix or a networkx graph; see :func:`check_graph`) take
+    the graph Laplacians (``"graph"``, ``"normalized"``, ``"random_walk"``) on their
+    edge weights; ``"cotangent"`` is refused for them, naming the sample. Their fields
+    have nodes without coordinates (``vertices`` of shape ``(n_kept_nodes, 0)``), no
+    faces, and the kept graph's edges (renumbered) as ``edges``. PersLay's signatures
+    are ``LaplacianEigenTransformer(laplacian="normalized", normalization="none",
+    components="all", signature="hks", times=(0.1, 10))``: every eigenpair of the
+    normalized Laplacian, unit-norm eigenvectors.
+
     Parameters
     ----------
     eigen_index : int or tuple of int, default=(1, 2, 3)
@@ -131,11 +172,16 @@ class LaplacianEigenTransformer(SampleTransformer):
         default, the first three non-constant ones, is the paper's suggested extension
         (its accuracy against the Fiedler vector alone is in ``docs/eigenfunctions.md``);
         ``eigen_index=1`` is the paper's setting.
-    laplacian : {"cotangent", "graph"}, default="cotangent"
+    laplacian : {"cotangent", "graph", "normalized", "random_walk"}, default="cotangent"
         ``"cotangent"``: finite-element Laplace-Beltrami operator (cotangent stiffness,
         barycentric lumped mass), solved as ``L phi = lambda M phi``; it depends on the
         geometry only, not on the triangulation. ``"graph"``: combinatorial graph
-        Laplacian of the edges; it ignores geometry and depends on the resolution.
+        Laplacian ``D - A`` of the edges (a graph's weighted edges); it ignores geometry
+        and depends on the resolution. ``"normalized"``: ``I - D^-1/2 A D^-1/2`` (an
+        isolated node has ``L_ii = 0``), eigenvalues in ``[0, 2]``; ``"random_walk"``:
+        ``I - D^-1 A``, solved as ``(D - A) phi = lambda D phi`` (the normalized
+        Laplacian's eigenvalues, D-orthonormal eigenvectors). See
+        :mod:`sklearn_meshph.spectral.laplacians`.
     normalization : {"area", "none"}, default="area"
         ``"area"``: the mesh is scaled to unit area and eigenvectors are M-orthonormal,
         so eigenfunctions have unit mean square and do not depend on the mesh's scale
@@ -143,11 +189,19 @@ class LaplacianEigenTransformer(SampleTransformer):
         ``"none"``: the mesh as given, cotangent eigenvectors M-orthonormal at its own
         scale and graph eigenvectors of unit Euclidean norm; with the graph Laplacian
         this is the paper's literal setting (whose values shrink like ``1/sqrt(n)``).
-    components : {"largest", "error"}, default="largest"
+        On a graph, ``"area"`` divides the mass by its sum (``M = I / n`` for
+        ``"graph"`` and ``"normalized"``, ``D / vol`` for ``"random_walk"``): unit
+        mean square eigenvectors, eigenvalues multiplied by that sum; ``"none"`` keeps
+        the plain operator (PersLay's: unit-norm eigenvectors).
+    components : {"largest", "error", "all"}, default="largest"
         A mesh of several connected components keeps only the component of largest
         area (``"largest"``) or raises (``"error"``). See :func:`clean_mesh` for the
         whole cleaning policy. Cleaning that drops more than 1% of a mesh's vertices or
         area emits a :class:`MeshCleaningWarning` naming the sample (and its file).
+        A graph keeps its component of most nodes (``"largest"``, an isolated node being
+        a component; the warning counts nodes and edge weight), raises (``"error"``) or
+        is kept whole (``"all"``: one zero eigenvalue per component, isolated nodes
+        included); ``"all"`` is for graphs only, a mesh or a cloud given it raises.
     weld : bool, default=True
         Weld vertices at the same position (within ``1e-10`` times the bounding-box
         diagonal) before cleaning, so that STL triangle soups and OBJ files split along
@@ -176,9 +230,12 @@ class LaplacianEigenTransformer(SampleTransformer):
         reusable; the output does not depend on it beyond rounding. ``None`` or a
         ``RandomState`` draws a new start vector at every call, which ``memory`` then
         never finds in its cache.
-    solver : {"auto", "cholesky", "superlu"}, default="auto"
+    solver : {"auto", "cholesky", "superlu", "dense"}, default="auto"
         Factorization backend of the shift-invert eigensolver: our supernodal Cholesky
-        (``"auto"`` and ``"cholesky"``) or SciPy's SuperLU. Both give the same
+        (``"auto"`` and ``"cholesky"``) or SciPy's SuperLU; ``"dense"``: LAPACK's
+        dense eigensolver at any size (its memory grows as the square of the size).
+        ``"auto"`` solves small operators densely (a few hundred vertices or nodes; the
+        measured crossover is in ``docs/eigenfunctions.md``). All give the same
         eigenpairs up to rounding.
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the meshes on stderr (needs tqdm,
@@ -197,10 +254,18 @@ class LaplacianEigenTransformer(SampleTransformer):
         way). With ``signature="eigenfunctions"`` it must exceed ``max(eigen_index)``
         (``None``: ``max(eigen_index) + 1``). The solver works in blocks of a few
         eigenpairs and drops what it solved beyond the request, so a grid over nearby
-        values reuses one cached solve per mesh (``memory``).
+        values reuses one cached solve per mesh (``memory``). On a graph, ``None``
+        behind a signature means every eigenpair (PersLay's setting: a dense solve,
+        refused above a size whose matrices would not fit in memory).
     n_scales : int, default=5
         Times (``"hks"``) or energies (``"wks"``) of a signature, chosen from each
-        mesh's eigenvalues (scale-free at unit area); ignored for ``"eigenfunctions"``.
+        mesh's eigenvalues (scale-free at unit area); ignored for ``"eigenfunctions"``
+        and where ``times`` is given.
+    times : array-like of float, default=None
+        Fixed times of ``"hks"`` and ``"log-hks"``, the same for every sample (columns
+        named ``"heat kernel signature t=10"``), instead of the ``n_scales`` times
+        chosen from each sample's eigenvalues; each finite, between ``1e-150`` and
+        ``1e150``. Ignored for the other signatures.
 
     Attributes
     ----------
@@ -248,7 +313,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "eigen_index": [Interval(Integral, 0, None, closed="left"), tuple],
         "laplacian": [Options(LAPLACIANS)],
         "normalization": [Options(("area", "none"))],
-        "components": [Options(COMPONENT_POLICIES)],
+        "components": [Options(COMPONENTS)],
         "weld": ["boolean"],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
@@ -258,6 +323,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         "signature": [Options(SIGNATURES)],
         "n_eigenpairs": [Interval(Integral, 2, None, closed="left"), None],
         "n_scales": [Interval(Integral, 1, None, closed="left")],
+        "times": [None, tuple, list, np.ndarray],
     }
 
     def __init__(
@@ -275,6 +341,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         signature="eigenfunctions",
         n_eigenpairs=None,
         n_scales=5,
+        times=None,
     ):
         self.eigen_index = eigen_index
         self.laplacian = laplacian
@@ -289,6 +356,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         self.signature = signature
         self.n_eigenpairs = n_eigenpairs
         self.n_scales = n_scales
+        self.times = times
 
     def _indices(self) -> tuple[int, ...]:
         if isinstance(self.eigen_index, tuple):
@@ -307,6 +375,8 @@ class LaplacianEigenTransformer(SampleTransformer):
         super()._check_params()
         indices = self._indices()
         cache_of(self.memory)  # refuses an empty path
+        if self.times is not None:
+            check_times(self.times)
         if (
             SIGNATURES[self.signature].value is None
             and self.n_eigenpairs is not None
@@ -373,7 +443,8 @@ class LaplacianEigenTransformer(SampleTransformer):
             n_solve, tracked = max(max(indices) + 3, self.n_eigenpairs or 0), indices
             n_kept = self.n_eigenpairs or max(indices) + 1
         else:
-            n_kept = n_solve = self.n_eigenpairs or _SIGNATURE_EIGENPAIRS
+            # None: every eigenpair of a graph, _SIGNATURE_EIGENPAIRS of others.
+            n_kept = n_solve = self.n_eigenpairs
             tracked = ()
         settings = SolveSettings(
             laplacian=self.laplacian,
@@ -403,46 +474,64 @@ class LaplacianEigenTransformer(SampleTransformer):
         results = [None] * len(meshes)
         for i, result in zip(order, solved, strict=True):
             results[i] = result
-        fields = []
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
-        for i, (clean, values, vectors, complete) in enumerate(results):
-            report = clean.report
-            # First: a mesh reduced to a few vertices is explained before it is refused.
-            warn_if_lossy(report, describe(i, meshes[i]), stacklevel=3)
-            warn_if_needles(clean, i, stacklevel=3)
-            if signature is not None:
-                # Exactly the eigenpairs asked for: the solve's block is not seen.
-                values, vectors = values[:n_kept], vectors[:, :n_kept]
-                if len(values) < 2:
-                    raise ValueError(f"sample {i}: the cleaned mesh has too few vertices")
-                field_values, names = signature(values, vectors, self.n_scales)
-                field_eigenvalues = None
-            elif max(indices) >= len(values):
-                raise ValueError(
-                    f"sample {i}: eigen_index {max(indices)} needs at least "
-                    f"{max(indices) + 1} vertices, the cleaned mesh has {len(values)}"
+        fields = []
+        for i, result in enumerate(results):  # not a comprehension, a frame more to warn
+            fields.append(self._field(i, meshes[i], result, signature, indices, column, n_kept))
+        return fields
+
+    def _field(self, i, sample, result, signature, indices, column, n_kept):
+        """The :class:`ScalarField` of sample ``i`` from its solve."""
+        clean, values, vectors, complete, edges = result
+        report = clean.report
+        graph = edges is not None
+        # First: a sample reduced to a few vertices is explained before it is refused.
+        if graph:
+            warn_graph_components(report, describe(i, sample), stacklevel=4)
+        else:
+            warn_if_lossy(report, describe(i, sample), stacklevel=4)
+            warn_if_needles(clean, i, stacklevel=4)
+        what = "graph has too few nodes" if graph else "mesh has too few vertices"
+        if signature is not None:
+            # Exactly the eigenpairs asked for: the solve's block is not seen.
+            if n_kept is None and not graph:
+                n_kept = _SIGNATURE_EIGENPAIRS
+            values, vectors = values[:n_kept], vectors[:, :n_kept]
+            fixed = self.times is not None and self.signature in HEAT_SIGNATURES
+            if len(values) < (1 if fixed else 2):
+                raise ValueError(f"sample {i}: the cleaned {what}")
+            try:
+                field_values, names = signature(
+                    values, vectors, check_times(self.times) if fixed else self.n_scales
                 )
-            else:
-                warn_if_repeated(values, indices, i, complete)
-                field_values, field_eigenvalues = vectors[:, column], values[column]
-                names = tuple(f"eigenfunction {k}" for k in indices)
-                values = values[:n_kept]
-            identity = len(clean.vertices) == report.n_input_vertices
+            except ValueError as error:  # no positive eigenvalue to choose scales from
+                raise ValueError(f"sample {i}: {error}") from None
+            field_eigenvalues = None
+        elif max(indices) >= len(values):
+            raise ValueError(
+                f"sample {i}: eigen_index {max(indices)} needs at least "
+                f"{max(indices) + 1} {'nodes' if graph else 'vertices'}, the cleaned "
+                f"{what.split()[0]} has {len(values)}"
+            )
+        else:
+            warn_if_repeated(values, indices, i, complete)
+            field_values, field_eigenvalues = vectors[:, column], values[column]
+            names = tuple(f"eigenfunction {k}" for k in indices)
+            values = values[:n_kept]
+        identity = len(clean.vertices) == report.n_input_vertices
+        if not graph and len(clean.faces) == 0:
             # A cloud's complex is its kNN graph, built here from the kept points (cheap,
             # and the same whether the solve came from the cache or not).
-            points = len(clean.faces) == 0
-            fields.append(
-                ScalarField(
-                    vertices=clean.vertices,
-                    faces=clean.faces,
-                    edges=knn_graph(clean.vertices) if points else None,
-                    values=field_values,
-                    eigenvalues=field_eigenvalues,
-                    vertex_indices=None if identity else clean.vertex_indices,
-                    input_to_kept=None if identity else clean.input_to_kept,
-                    cleaning=report if report.dropped else None,
-                    spectrum=values,
-                    column_names=names,
-                )
-            )
-        return fields
+            edges = knn_graph(clean.vertices)
+        return ScalarField(
+            vertices=clean.vertices,
+            faces=clean.faces,
+            edges=edges,
+            values=field_values,
+            eigenvalues=field_eigenvalues,
+            vertex_indices=None if identity else clean.vertex_indices,
+            input_to_kept=None if identity else clean.input_to_kept,
+            cleaning=report if report.dropped else None,
+            spectrum=values,
+            column_names=names,
+        )
