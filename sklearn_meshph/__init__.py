@@ -17,6 +17,7 @@ from .combine import CombinedDistance, FeatureDistance
 from .datasets import load_mesh_folder, make_shapes, sample_point_cloud
 from .diagrams import (
     DiagramDistance,
+    PerDiagramDistance,
     bottleneck_distance,
     from_giotto,
     from_gudhi,
@@ -28,6 +29,7 @@ from .diagrams import (
     to_persim,
     wasserstein_distance,
 )
+from .graph import Graph, check_graph
 from .mesh import (
     CleaningReport,
     MeshCleaningWarning,
@@ -60,15 +62,18 @@ __all__ = [
     "CleaningReport",
     "DiagramDistance",
     "FeatureDistance",
+    "Graph",
     "LaplacianEigenTransformer",
     "LowerStarPersistence",
     "MeshCleaningWarning",
     "MeshQualityWarning",
+    "PerDiagramDistance",
     "ConstantEigenfunctionWarning",
     "RepeatedEigenvalueWarning",
     "ScalarField",
     "ShapeDNA",
     "bottleneck_distance",
+    "check_graph",
     "check_mesh",
     "check_point_cloud",
     "clean_mesh",

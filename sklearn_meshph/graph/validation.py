@@ -1,9 +1,31 @@
-"""Graphs: the validated form every stage reads, and the one validator of graph samples."""
+"""Graphs: the validated form every stage reads, and the one validator of graph samples.
+
+A graph sample is one of
+
+- a :class:`Graph` (validated when made, returned as is);
+- a ``networkx.Graph`` (networkx is imported by nobody here: the object is read through
+  its own methods). Nodes are numbered in sorted order when they sort, else in insertion
+  order; an edge's ``"weight"`` attribute is its weight (1 when absent); the node
+  attributes ``"label"`` (a number) and ``"attributes"`` (a sequence of numbers) become
+  the columns of ``node_values`` (the label first). Directed graphs and multigraphs are
+  refused (``to_undirected()``, ``networkx.Graph(g)`` make one);
+- a scipy sparse adjacency matrix: square, symmetric (up to rounding), entries
+  non-negative and finite; stored zeros are no edge. Never made dense;
+- an ``(n_nodes, edges)`` pair, ``edges`` an ``(m, 2)`` integer array of node indices
+  ``0 <= i < n_nodes``: repeated edges and both directions of an edge are one edge of
+  weight 1.
+
+Whatever the form, self-loops are dropped (a loop joins a node to itself: no simplex of
+the graph, no cycle, and in the Laplacians of a graph it only shifts a node's degree),
+and so are edges of weight 0. Isolated nodes and several components are valid: an
+isolated node is a component of one node. Which components the eigen stage keeps is its
+``components`` policy, not this validator's. A graph without nodes is refused.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from numbers import Integral
+from numbers import Integral, Number
 
 import numpy as np
 import scipy.sparse as sp
@@ -12,11 +34,56 @@ from ..mesh.validation import where
 
 __all__ = ["Graph", "check_graph", "is_graph"]
 
+# Relative difference tolerated between a[i, j] and a[j, i] of a symmetric adjacency.
+_SYMMETRY_RTOL = 1e-10
+
 
 def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.array(array, copy=True)
     array.flags.writeable = False
     return array
+
+
+def _n_nodes(n_nodes, place: str) -> int:
+    if isinstance(n_nodes, bool) or not isinstance(n_nodes, Integral):
+        raise TypeError(f"{place}: n_nodes must be a positive int, got {n_nodes!r}")
+    if n_nodes < 1:
+        raise ValueError(f"{place}: a graph needs at least one node, got n_nodes={n_nodes}")
+    return int(n_nodes)
+
+
+def _edge_array(edges, place: str) -> np.ndarray:
+    """``edges`` as an ``(m, 2)`` int64 array, or an error saying what it is."""
+    try:
+        array = np.asarray(edges)
+    except (ValueError, TypeError):
+        raise ValueError(f"{place}: edges must be an (m, 2) integer array") from None
+    if array.size == 0:
+        return np.empty((0, 2), dtype=np.int64)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ValueError(f"{place}: edges must be an (m, 2) integer array, got shape {array.shape}")
+    if array.dtype.kind not in "iu":
+        raise TypeError(f"{place}: edges must be integers, got dtype {array.dtype}")
+    return array.astype(np.int64, copy=False)
+
+
+def _check_node_values(values, n_nodes: int, place: str):
+    if values is None:
+        return None
+    try:
+        values = np.asarray(values, dtype=np.float64)
+    except (ValueError, TypeError):
+        raise TypeError(f"{place}: node values must be numbers") from None
+    if values.ndim == 1:
+        values = values[:, None]
+    if values.ndim != 2 or len(values) != n_nodes:
+        raise ValueError(
+            f"{place}: node values must have shape ({n_nodes}, n_values), got {values.shape}"
+        )
+    if not np.isfinite(values).all():
+        node = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
+        raise ValueError(f"{place}: node {node} has a NaN or infinite value")
+    return values
 
 
 @dataclass(frozen=True, eq=False)
@@ -26,13 +93,20 @@ class Graph:
     Parameters
     ----------
     n_nodes : int
-        Number of nodes (isolated nodes included).
+        Number of nodes (isolated nodes included), at least 1.
     edges : ndarray of shape (n_edges, 2)
         Each undirected edge once, as node indices ``i < j``, rows sorted.
     weights : ndarray of shape (n_edges,)
         Positive finite edge weights (ones for an unweighted graph).
     node_values : ndarray of shape (n_nodes, n_values), optional
-        Node labels or attributes that travel with the graph.
+        Node labels or attributes that travel with the graph (finite; one value per
+        node may be given as an ``(n_nodes,)`` array).
+
+    Raises
+    ------
+    ValueError, TypeError
+        When a field breaks the rules above (the checks are linear in the size).
+        :func:`check_graph` makes a ``Graph`` from looser forms.
     """
 
     n_nodes: int
@@ -41,12 +115,28 @@ class Graph:
     node_values: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
-        object.__setattr__(self, "edges", _frozen(np.asarray(self.edges, dtype=np.int64)))
-        object.__setattr__(self, "weights", _frozen(np.asarray(self.weights, dtype=np.float64)))
-        if self.node_values is not None:
-            object.__setattr__(
-                self, "node_values", _frozen(np.asarray(self.node_values, dtype=np.float64))
-            )
+        place = "graph"
+        n_nodes = _n_nodes(self.n_nodes, place)
+        edges = _edge_array(self.edges, place)
+        weights = np.asarray(self.weights, dtype=np.float64).reshape(-1)
+        if len(weights) != len(edges):
+            raise ValueError(f"{place}: {len(edges)} edges but {len(weights)} weights")
+        i, j = edges[:, 0], edges[:, 1]
+        if len(edges) and (i.min() < 0 or j.max() >= n_nodes):
+            raise ValueError(f"{place}: an edge has a node outside 0..{n_nodes - 1}")
+        if not (i < j).all():
+            raise ValueError(f"{place}: each edge must be given as (i, j) with i < j")
+        step = np.diff(i)
+        if not ((step > 0) | ((step == 0) & (np.diff(j) > 0))).all():
+            raise ValueError(f"{place}: edges must be sorted rows without repeats")
+        if not (np.isfinite(weights) & (weights > 0)).all():
+            raise ValueError(f"{place}: edge weights must be positive and finite")
+        node_values = _check_node_values(self.node_values, n_nodes, place)
+        object.__setattr__(self, "n_nodes", n_nodes)
+        object.__setattr__(self, "edges", _frozen(edges))
+        object.__setattr__(self, "weights", _frozen(weights))
+        if node_values is not None:
+            object.__setattr__(self, "node_values", _frozen(node_values))
 
     @property
     def n_edges(self) -> int:
@@ -63,23 +153,174 @@ class Graph:
 
 def is_graph(sample) -> bool:
     """Whether ``sample`` (not a path) is a graph: a :class:`Graph`, an ``(n_nodes,
-    edges)`` pair (an integer first), a scipy sparse matrix or a networkx graph."""
+    edges)`` pair (a number first), a scipy sparse matrix or a networkx graph."""
     if isinstance(sample, Graph) or sp.issparse(sample):
         return True
     if isinstance(sample, tuple | list) and len(sample) == 2:
-        first = sample[0]
-        return isinstance(first, Integral) and not isinstance(first, bool)
+        return isinstance(sample[0], Number)
     return hasattr(sample, "adj") and hasattr(sample, "nodes")
 
 
+def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: str) -> Graph:
+    """The :class:`Graph` of edges in any order and direction: self-loops and edges of
+    weight 0 dropped, repeats (both directions too) made one. Repeats of one edge must
+    have equal weights."""
+    if len(edges) and (edges.min() < 0 or edges.max() >= n_nodes):
+        row = int(np.flatnonzero(((edges < 0) | (edges >= n_nodes)).any(axis=1))[0])
+        raise ValueError(
+            f"{place}: edge {row} {tuple(edges[row].tolist())} has a node outside 0..{n_nodes - 1}"
+        )
+    weights = np.ones(len(edges)) if weights is None else weights
+    keep = (edges[:, 0] != edges[:, 1]) & (weights != 0)
+    low = np.minimum(edges[keep, 0], edges[keep, 1])
+    high = np.maximum(edges[keep, 0], edges[keep, 1])
+    keys, first, inverse = np.unique(low * n_nodes + high, return_index=True, return_inverse=True)
+    weights = weights[keep]
+    if not np.array_equal(weights, weights[first][inverse]):
+        raise ValueError(f"{place}: an edge is given twice with different weights")
+    pairs = np.column_stack([keys // n_nodes, keys % n_nodes])
+    return Graph(n_nodes, pairs, weights[first], node_values)
+
+
+def _weight(value, place: str) -> float:
+    try:
+        weight = float(value)
+    except (ValueError, TypeError):
+        raise TypeError(f"{place}: edge weight {value!r} is not a number") from None
+    if not np.isfinite(weight) or weight < 0:
+        raise ValueError(f"{place}: edge weights must be non-negative and finite, got {weight}")
+    return weight
+
+
+def _networkx_node_values(data: list[dict], place: str):
+    """The ``"label"`` and ``"attributes"`` of the nodes as columns, or None."""
+    columns = []
+    for key in ("label", "attributes"):
+        present = [key in d for d in data]
+        if not any(present):
+            continue
+        if not all(present):
+            node = present.index(False)
+            raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
+        try:
+            column = np.array([d[key] for d in data], dtype=np.float64)
+        except (ValueError, TypeError):
+            raise TypeError(
+                f"{place}: node {key!r} values must be numbers (encode text labels first)"
+            ) from None
+        columns.append(column.reshape(len(data), -1))
+    return np.hstack(columns) if columns else None
+
+
+def _from_networkx(graph, place: str) -> Graph:
+    if graph.is_directed():
+        raise TypeError(f"{place}: a directed networkx graph; pass graph.to_undirected()")
+    if graph.is_multigraph():
+        raise TypeError(f"{place}: a networkx multigraph; pass networkx.Graph(graph)")
+    nodes = list(graph.nodes)
+    try:
+        nodes = sorted(nodes)
+    except TypeError:  # nodes of kinds that do not compare: insertion order
+        pass
+    position = {node: k for k, node in enumerate(nodes)}
+    n_nodes = _n_nodes(len(nodes), place)
+    attributes = graph.nodes(data=True)
+    node_values = _networkx_node_values([attributes[node] for node in nodes], place)
+    triples = [
+        (position[u], position[v], _weight(d.get("weight", 1.0), place))
+        for u, v, d in graph.edges(data=True)
+    ]
+    edges = np.array([t[:2] for t in triples], dtype=np.int64).reshape(-1, 2)
+    weights = np.array([t[2] for t in triples], dtype=np.float64)
+    return _from_edges(
+        n_nodes, edges, weights, _check_node_values(node_values, n_nodes, place), place
+    )
+
+
+def _asymmetry(rows, cols, values, n: int, place: str) -> None:
+    """Refuse an adjacency whose upper and lower triangles differ; name one entry."""
+    upper, lower = rows < cols, rows > cols
+    up_keys = rows[upper] * n + cols[upper]
+    low_keys = cols[lower] * n + rows[lower]
+    up_order, low_order = np.argsort(up_keys), np.argsort(low_keys)
+    up_keys, low_keys = up_keys[up_order], low_keys[low_order]
+    up_values, low_values = values[upper][up_order], values[lower][low_order]
+    if len(up_keys) == len(low_keys) and np.array_equal(up_keys, low_keys):
+        close = np.abs(up_values - low_values) <= _SYMMETRY_RTOL * np.maximum(up_values, low_values)
+        if close.all():
+            return
+        k = int(np.flatnonzero(~close)[0])
+        i, j = divmod(int(up_keys[k]), n)
+        a, b = up_values[k], low_values[k]
+    else:
+        missing = np.setxor1d(up_keys, low_keys)[0]
+        i, j = divmod(int(missing), n)
+        a = up_values[up_keys == missing][0] if np.isin(missing, up_keys) else 0.0
+        b = low_values[low_keys == missing][0] if np.isin(missing, low_keys) else 0.0
+    raise ValueError(
+        f"{place}: the adjacency matrix is not symmetric: entry ({i}, {j}) is {a:g} "
+        f"but ({j}, {i}) is {b:g}"
+    )
+
+
+def _from_sparse(matrix, place: str) -> Graph:
+    if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1]:
+        raise ValueError(f"{place}: an adjacency matrix must be square, got shape {matrix.shape}")
+    n_nodes = _n_nodes(matrix.shape[0], place)
+    if matrix.dtype.kind not in "biuf":
+        raise TypeError(f"{place}: adjacency entries must be real numbers, got {matrix.dtype}")
+    coo = sp.coo_array(matrix, copy=True)  # a copy: the caller's matrix is left alone
+    coo.sum_duplicates()
+    values = coo.data.astype(np.float64)
+    if not np.isfinite(values).all():
+        raise ValueError(f"{place}: the adjacency matrix has a NaN or infinite entry")
+    if (values < 0).any():
+        k = int(np.flatnonzero(values < 0)[0])
+        raise ValueError(
+            f"{place}: the adjacency matrix has a negative entry ({int(coo.row[k])}, "
+            f"{int(coo.col[k])}) = {values[k]:g}; edge weights must be non-negative"
+        )
+    rows, cols = coo.row.astype(np.int64), coo.col.astype(np.int64)
+    kept = (values != 0) & (rows != cols)
+    rows, cols, values = rows[kept], cols[kept], values[kept]
+    _asymmetry(rows, cols, values, n_nodes, place)
+    upper = rows < cols
+    edges = np.column_stack([rows[upper], cols[upper]])
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    return Graph(n_nodes, edges[order], values[upper][order])
+
+
 def check_graph(sample, *, index: int | None = None) -> Graph:
-    """``sample`` as a validated :class:`Graph`, errors naming the sample."""
+    """``sample`` as a validated :class:`Graph`; errors name the sample.
+
+    Parameters
+    ----------
+    sample : Graph, networkx.Graph, scipy sparse matrix or (n_nodes, edges) pair
+        See the module's documentation for what each form means.
+    index : int, optional
+        The sample's position, for the messages (``"sample 3: ..."``).
+
+    Returns
+    -------
+    Graph
+
+    Raises
+    ------
+    TypeError
+        A sample of none of these forms; a directed graph or multigraph; ``n_nodes`` not
+        an int; edges or entries that are not numbers.
+    ValueError
+        No node; an edge outside ``0..n_nodes - 1`` or of the wrong shape; an asymmetric,
+        non-square adjacency; a negative, NaN or infinite weight; a NaN node value.
+    """
+    place = where(index, "graph")
     if isinstance(sample, Graph):
         return sample
-    if isinstance(sample, tuple | list) and len(sample) == 2:
-        n_nodes, edges = int(sample[0]), np.asarray(sample[1])
-        if edges.ndim != 2 or edges.shape[1] != 2 or edges.dtype.kind not in "iu":
-            raise ValueError(f"{where(index)}: edges must be an (m, 2) integer array")
-        edges = np.unique(np.sort(edges.astype(np.int64), axis=1), axis=0)
-        return Graph(n_nodes, edges, np.ones(len(edges)))
-    raise TypeError(f"{where(index)}: not a graph: {type(sample).__name__}")
+    if sp.issparse(sample):
+        return _from_sparse(sample, place)
+    if isinstance(sample, tuple | list) and len(sample) == 2 and isinstance(sample[0], Number):
+        n_nodes = _n_nodes(sample[0], place)
+        return _from_edges(n_nodes, _edge_array(sample[1], place), None, None, place)
+    if hasattr(sample, "adj") and hasattr(sample, "nodes"):
+        return _from_networkx(sample, place)
+    raise TypeError(f"{place}: not a graph: {type(sample).__name__}")
