@@ -3,6 +3,7 @@ clouds sampled from meshes."""
 
 from __future__ import annotations
 
+import math
 import os
 import warnings
 from functools import partial
@@ -407,44 +408,99 @@ def make_shapes(
     )
 
 
+class _FiniteInterval(Interval):
+    """An :class:`Interval` of finite numbers only (``inf`` is refused)."""
+
+    def __call__(self, value) -> bool:
+        return super().__call__(value) and math.isfinite(value)
+
+    def __str__(self) -> str:
+        return "a finite " + super().__str__().removeprefix("a ")
+
+
 @validate_params(
     {
         "n_points": [Interval(Integral, 1, None, closed="left")],
-        "noise": [Interval(Real, 0, None, closed="left")],
+        "noise": [_FiniteInterval(Real, 0, None, closed="left")],
+        "density": [_FiniteInterval(Real, 1, None, closed="left")],
+        "holes": [Interval(Integral, 0, None, closed="left")],
+        "hole_fraction": [Interval(Real, 0, 0.5, closed="right")],
+        "outliers": [Interval(Integral, 0, None, closed="left")],
         "random_state": ["random_state"],
     }
 )
-def sample_point_cloud(mesh, n_points: int, *, noise: float = 0.0, random_state=None):
-    """Sample points uniformly on a mesh's surface, optionally with Gaussian noise.
+def sample_point_cloud(
+    mesh,
+    n_points: int,
+    *,
+    noise: float = 0.0,
+    density: float = 1.0,
+    holes: int = 0,
+    hole_fraction: float = 0.1,
+    outliers: int = 0,
+    random_state=None,
+):
+    """Sample points uniformly on a mesh's surface, optionally as a real scan would be.
 
     A scan without connectivity, made from a mesh: for benchmarks, tests, and to
-    compare a shape's mesh with its point cloud.
+    compare a shape's mesh with its point cloud. Beyond Gaussian noise, the defects of
+    real scans can be simulated: uneven density (``density``), holes where views are
+    missing (``holes``) and stray points (``outliers``). With their defaults the sample
+    is uniform, and the same, for the same ``random_state``, as without these options.
 
     Parameters
     ----------
     mesh : trimesh.Trimesh, (vertices, faces) pair, str or os.PathLike
         See :func:`check_mesh`.
     n_points : int
-        Points to draw.
+        Points to draw on the surface (outliers come on top).
     noise : float, default=0.0
         Standard deviation of the Gaussian noise added to every coordinate, relative to
         the length of the mesh's bounding-box diagonal.
+    density : float, default=1.0
+        Uneven density: the surface is cut in two halves of equal area by a plane of
+        random direction, and one half is sampled ``density`` times more densely than
+        the other (each triangle is on the side of its centroid). ``1.0``: uniform.
+    holes : int, default=0
+        Holes, as left by missing views: ``holes`` random points of the sample are
+        chosen one after the other, each among the points still there, and the points
+        nearest to it (in space) are removed with it, ``hole_fraction`` of the sampled
+        points in all, shared equally between the holes. More points are drawn first,
+        so that ``n_points`` remain.
+    hole_fraction : float, default=0.1
+        Fraction of the sampled points the holes remove, in (0, 0.5]; on a uniform
+        sample, the fraction of the surface they cover. Used only with ``holes > 0``.
+    outliers : int, default=0
+        Stray points drawn uniformly in the mesh's bounding box grown by a quarter of
+        its diagonal on every side, appended after the surface points.
     random_state : int, RandomState instance or None, default=None
         Makes the sample reproducible.
 
     Returns
     -------
-    points : ndarray of shape (n_points, 3)
-        Uniform on the surface (area-weighted): a triangle is drawn with probability
-        proportional to its area, then a point uniformly inside it.
+    points : ndarray of shape (n_points + outliers, 3)
+        On the surface, area-weighted (a triangle is drawn with probability
+        proportional to its area, times ``density`` on the dense side, then a point
+        uniformly inside it), then the outliers.
+
+    Raises
+    ------
+    ValueError
+        If the mesh has no area, or if ``hole_fraction`` is too small for every hole
+        to remove a point.
 
     Examples
     --------
     >>> import trimesh
     >>> from sklearn_meshph import sample_point_cloud
-    >>> points = sample_point_cloud(trimesh.creation.icosphere(3), 1000, random_state=0)
-    >>> points.shape
+    >>> sphere = trimesh.creation.icosphere(3)
+    >>> sample_point_cloud(sphere, 1000, random_state=0).shape
     (1000, 3)
+    >>> scan = sample_point_cloud(
+    ...     sphere, 1000, noise=0.005, density=4.0, holes=2, outliers=5, random_state=0
+    ... )
+    >>> scan.shape
+    (1005, 3)
     """
     vertices, faces = check_mesh(mesh)
     rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
@@ -454,14 +510,54 @@ def sample_point_cloud(mesh, n_points: int, *, noise: float = 0.0, random_state=
     )
     if not areas.sum() > 0:
         raise ValueError("mesh: the surface has no area to sample")
-    chosen = rng.choice(len(faces), size=n_points, p=areas / areas.sum())
+    n_removed = round(n_points * hole_fraction / (1 - hole_fraction)) if holes else 0
+    if n_removed < holes:
+        raise ValueError(
+            f"hole_fraction={hole_fraction!r} removes {n_removed} of the points for "
+            f"{holes} holes: each hole needs at least one point (a larger hole_fraction, "
+            "more points or fewer holes)"
+        )
+    weights = areas if density == 1 else _uneven(corners, areas, density, rng)
+    n_drawn = n_points + n_removed
+    chosen = rng.choice(len(faces), size=n_drawn, p=weights / weights.sum())
     # Uniform barycentric coordinates: reflect the unit square's upper triangle.
-    u, v = rng.random(n_points), rng.random(n_points)
+    u, v = rng.random(n_drawn), rng.random(n_drawn)
     flip = u + v > 1
     u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
     a, b, c = (corners[chosen, k] for k in range(3))
     points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    low, high = vertices.min(axis=0), vertices.max(axis=0)
+    diagonal = float(np.linalg.norm(high - low))
     if noise > 0:
-        diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
         points = points + rng.normal(scale=noise * diagonal, size=points.shape)
+    if holes:
+        points = _cut_holes(points, holes, n_removed, rng)
+    if outliers:
+        margin = diagonal / 4
+        stray = rng.uniform(low - margin, high + margin, size=(outliers, 3))
+        points = np.concatenate([points, stray])
     return points
+
+
+def _uneven(corners, areas, density: float, rng):
+    """Triangle weights: areas, times ``density`` on one side of a plane of random
+    direction cutting the surface in two halves of equal area."""
+    direction = rng.normal(size=3)
+    height = corners.mean(axis=1) @ (direction / np.linalg.norm(direction))
+    order = np.argsort(height, kind="stable")
+    cumulative = np.cumsum(areas[order])
+    middle = height[order[np.searchsorted(cumulative, cumulative[-1] / 2)]]
+    return np.where(height > middle, density * areas, areas)
+
+
+def _cut_holes(points, holes: int, n_removed: int, rng):
+    """``points`` without ``holes`` holes of ``n_removed`` points in all: each around a
+    random remaining point, its nearest remaining points (itself included)."""
+    sizes = np.full(holes, n_removed // holes) + (np.arange(holes) < n_removed % holes)
+    kept = np.ones(len(points), dtype=bool)
+    for size in sizes:
+        remaining = np.flatnonzero(kept)
+        centre = points[remaining[rng.integers(len(remaining))]]
+        distances = np.linalg.norm(points[remaining] - centre, axis=1)
+        kept[remaining[np.argpartition(distances, size - 1)[:size]]] = False
+    return points[kept]
