@@ -9,6 +9,7 @@
 - :mod:`._batch`: packed samples and the batched loop over pairs;
 - :mod:`.pairwise`: ``pairwise_diagram_distances``, blocks of pairs over joblib;
 - :mod:`.transformer`: ``DiagramDistance``;
+- :mod:`.per_diagram`: ``PerDiagramDistance`` (the distances of each diagram position);
 - :mod:`.converters`: to and from gudhi, persim and giotto-tda.
 """
 
@@ -20,12 +21,14 @@ from .distances import (
     wasserstein_distance,
 )
 from .pairwise import pairwise_diagram_distances
+from .per_diagram import PerDiagramDistance
 from .transformer import DiagramDistance
 from .validation import check_diagram, check_sample, check_samples
 
 __all__ = [
     "METRICS",
     "DiagramDistance",
+    "PerDiagramDistance",
     "bottleneck_distance",
     "check_diagram",
     "check_sample",

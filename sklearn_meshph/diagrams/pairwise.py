@@ -24,6 +24,7 @@ __all__ = [
     "PairwiseTransformer",
     "as_packed",
     "distance_matrix",
+    "distance_stack",
     "pack_for_metric",
     "pair_distances",
     "pair_matrix",
@@ -69,6 +70,7 @@ def _block(function, left, right, start, stop, n_cols, symmetric, first):
         "n_jobs": [Integral, None],
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "per_diagram": ["boolean"],
     }
 )
 def pairwise_diagram_distances(
@@ -83,6 +85,7 @@ def pairwise_diagram_distances(
     out=None,
     verbose=0,
     n_directions=10,
+    per_diagram=False,
 ) -> np.ndarray:
     """Distance matrix between two collections of diagrams (or of tuples of diagrams).
 
@@ -109,17 +112,22 @@ def pairwise_diagram_distances(
         means all processors. Results are identical for any ``n_jobs`` and backend.
     dtype : numpy dtype, default=float64
         Of the returned matrix (distances are computed in float64).
-    out : ndarray of shape (len(X), len(Y)), optional
+    out : ndarray of shape (len(X), len(Y)) or (len(X), len(Y), n_diagrams), optional
         Written in place and returned.
     verbose : int, default=0
         With ``verbose > 0``, a progress bar over the blocks of pairs on stderr (needs
         tqdm, the ``progress`` extra); nothing is printed at 0.
     n_directions : int, default=10
         Number of lines of the sliced Wasserstein distance (ignored by the others).
+    per_diagram : bool, default=False
+        Return the distance matrix of each diagram position, stacked on a last axis,
+        instead of their combination: what :class:`DistanceKernel` turns into a kernel
+        with a bandwidth per position, and what a grid search slices as a precomputed
+        matrix (see :class:`PerDiagramDistance`).
 
     Returns
     -------
-    ndarray of shape (len(X), len(Y))
+    ndarray of shape (len(X), len(Y)), or (len(X), len(Y), n_diagrams) with ``per_diagram``
 
     Notes
     -----
@@ -138,8 +146,13 @@ def pairwise_diagram_distances(
     left = pack_samples(X)
     right = None if Y is None else pack_samples(Y, n_diagrams=left.n_diagrams)
     shape = (len(left), len(left if right is None else right))
+    shape += (left.n_diagrams,) if per_diagram else ()
     if out is not None and out.shape != shape:
         raise ValueError(f"out has shape {out.shape}, expected {shape}")
+    if per_diagram:
+        return distance_stack(
+            left, right, metric, order, internal_p, n_directions, dtype, n_jobs, out, verbose
+        )
     return distance_matrix(
         left,
         right,
@@ -191,6 +204,42 @@ def distance_matrix(
         out=out,
         verbose=verbose,
     )
+
+
+def distance_stack(
+    left,
+    right,
+    metric,
+    order,
+    internal_p,
+    n_directions,
+    dtype=np.float64,
+    n_jobs=None,
+    out=None,
+    verbose=0,
+):
+    """The distance matrix of each diagram position of validated samples
+    (:class:`Packed`, or lists of tuples of diagrams), stacked: ``out[i, j, k]`` is the
+    distance between diagram ``k`` of ``left[i]`` and of ``right[j]`` (``right=None``:
+    ``left`` again, each unordered pair computed once)."""
+    left = as_packed(left)
+    right = None if right is None else as_packed(right)
+    n, m = len(left), len(left if right is None else right)
+    stack = np.empty((n, m, left.n_diagrams), dtype=dtype) if out is None else out
+    for k in range(left.n_diagrams):
+        distance_matrix(
+            left.only(k),
+            None if right is None else right.only(k),
+            metric,
+            order,
+            internal_p,
+            n_jobs,
+            dtype,
+            stack[:, :, k],
+            verbose=verbose,
+            n_directions=n_directions,
+        )
+    return stack
 
 
 def pair_matrix(

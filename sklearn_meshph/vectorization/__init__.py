@@ -2,6 +2,7 @@
 kernels (precomputed kernel matrices) of persistence diagrams."""
 
 from .curves import BettiCurve, EntropyCurve, PersistenceLandscape, Silhouette
+from .distance_kernel import DistanceKernel
 from .images import PersistenceImage
 from .kernels import (
     PersistenceScaleSpaceKernel,
@@ -13,6 +14,7 @@ from .summaries import DiagramStatistics, PersistenceEntropy
 __all__ = [
     "BettiCurve",
     "DiagramStatistics",
+    "DistanceKernel",
     "EntropyCurve",
     "PersistenceEntropy",
     "PersistenceImage",

@@ -24,16 +24,22 @@ from ..diagrams.validation import Packed, pack_samples
 
 __all__ = [
     "BANDWIDTH",
+    "COMBINATIONS",
+    "COMBINE_PARAMETERS",
     "COMMON_CONSTRAINTS",
     "INFINITE_POLICIES",
     "WEIGHT_CONSTRAINTS",
     "WEIGHT_PARAMETER",
+    "PER_POSITION",
     "PackedVectorizer",
     "PolicyTransformer",
     "apply_infinite",
+    "combine_positions",
     "common_sections",
     "check_finite_output",
     "point_weights",
+    "position_bandwidths",
+    "position_weights",
     "resolve_range",
 ]
 
@@ -48,6 +54,109 @@ _LARGEST_COORDINATE = float(np.finfo(np.float64).max / 4)
 #: The constraint of every ``bandwidth``: neither so small that its square underflows
 #: nor so large that the Gaussian's peak does (an image or kernel of silent zeros).
 BANDWIDTH = [Interval(Real, *_BANDWIDTHS, closed="both")]
+
+
+class _PerPosition:
+    """The constraint of a parameter given one value per diagram position: a non-empty
+    1-d sequence of numbers (its length is checked against the fitted samples)."""
+
+    def __call__(self, value) -> bool:
+        if isinstance(value, str | bytes):
+            return False
+        try:
+            values = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            return False
+        return values.ndim == 1 and values.size > 0
+
+    def __str__(self) -> str:
+        return "a sequence of floats (one per diagram position)"
+
+
+PER_POSITION = _PerPosition()
+
+#: How the kernels of the diagram positions of two samples make their kernel.
+COMBINATIONS = ("product", "sum", "mean")
+
+#: The documentation of ``combine`` and ``diagram_weights`` (the default of ``combine``
+#: is the caller's), indented for a class docstring's Parameters section.
+COMBINE_PARAMETERS = """combine : {{"product", "sum", "mean"}}, default="{default}"
+        How the kernels ``K_k`` of the diagram positions (samples of several diagrams)
+        make the kernel of two samples: their product, their weighted sum
+        ``sum_k w_k K_k``, or their weighted mean (that sum divided by ``sum_k w_k``).
+        Each is positive semi-definite when the ``K_k`` are.
+    diagram_weights : array-like of shape (n_diagrams,), default=None
+        The weights ``w_k`` of ``combine="sum"`` and ``"mean"``: finite, non-negative,
+        not all 0; ``None`` gives each position the weight 1. Refused with
+        ``"product"`` (give the positions their own bandwidths instead)."""
+
+
+def _per_position(value, n_diagrams: int, name: str) -> np.ndarray:
+    """``value`` (one number for every position, or one per position) as an array of
+    ``n_diagrams`` floats, refused when its length is not ``n_diagrams``."""
+    if np.ndim(value) == 0:
+        return np.full(n_diagrams, float(value))
+    values = np.asarray(value, dtype=np.float64)
+    if len(values) != n_diagrams:
+        raise ValueError(
+            f"{name} has {len(values)} values for {n_diagrams} diagram positions: give one "
+            "per position of the fitted samples, or a single number"
+        )
+    return values
+
+
+def position_bandwidths(bandwidth, n_diagrams: int) -> np.ndarray:
+    """The bandwidth of each diagram position, each refused (naming its position) when
+    it is not finite, its square underflows or its Gaussian's peak overflows."""
+    values = _per_position(bandwidth, n_diagrams, "bandwidth")
+    lo, hi = _BANDWIDTHS
+    bad = ~((values >= lo) & (values <= hi))  # NaN fails both
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"bandwidth of diagram position {k} is {float(values[k])!r}: a bandwidth must be "
+            f"finite and in [{lo:.3g}, {hi:.3g}] (neither so small that its square underflows "
+            "nor so large that the Gaussian's peak does)"
+        )
+    return values
+
+
+def position_weights(weights, combine: str, n_diagrams: int) -> np.ndarray:
+    """The weight of each diagram position in ``combine`` (all 1 when ``weights`` is
+    None), refused when negative, not finite, all 0, or given to a product."""
+    if weights is None:
+        return np.ones(n_diagrams)
+    if combine == "product":
+        raise ValueError(
+            "diagram_weights weigh the terms of combine='sum' or 'mean'; a product has no "
+            "terms to weigh (give each diagram position its own bandwidth instead)"
+        )
+    values = _per_position(weights, n_diagrams, "diagram_weights")
+    bad = ~(np.isfinite(values) & (values >= 0))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"diagram_weights of diagram position {k} is {float(values[k])!r}: weights must be "
+            "finite and non-negative"
+        )
+    if not values.any():
+        raise ValueError("diagram_weights are all 0: the kernel would vanish")
+    return values
+
+
+def combine_positions(kernels, combine: str, weights: np.ndarray) -> np.ndarray:
+    """The kernel of samples from the kernels of their diagram positions (equal-shape
+    arrays, one per position), combined in position order."""
+    if combine == "product":
+        total = kernels[0].copy()
+        for values in kernels[1:]:
+            total *= values
+        return total
+    total = weights[0] * kernels[0]
+    for weight, values in zip(weights[1:], kernels[1:], strict=True):
+        total += weight * values
+    return total / weights.sum() if combine == "mean" else total
+
 
 #: The parameters every vectorizer and kernel has, and their constraints.
 COMMON_CONSTRAINTS: dict = {

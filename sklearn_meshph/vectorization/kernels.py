@@ -16,7 +16,7 @@ from numbers import Integral
 import numba
 import numpy as np
 
-from .._param_validation import Interval
+from .._param_validation import Interval, Options
 from ..diagrams.pairwise import (
     SLICED,
     PairwiseTransformer,
@@ -28,13 +28,19 @@ from ..diagrams.pairwise import (
 )
 from ._base import (
     BANDWIDTH,
+    COMBINATIONS,
+    COMBINE_PARAMETERS,
     COMMON_CONSTRAINTS,
+    PER_POSITION,
     WEIGHT_CONSTRAINTS,
     WEIGHT_PARAMETER,
     PolicyTransformer,
     check_finite_output,
+    combine_positions,
     common_sections,
     point_weights,
+    position_bandwidths,
+    position_weights,
 )
 
 __all__ = [
@@ -49,19 +55,50 @@ class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
     policy, ``transform`` the kernel with them, ``fit_transform`` the symmetric matrix,
     each pair computed once (:class:`PairwiseTransformer`), on :class:`Packed` samples.
 
-    Subclasses define ``_pack(packed)`` (what the compiled loop reads) and
-    ``_pairs(n_parts)``, a picklable function ``(left, right, rows, cols)`` returning the
-    kernel values of the pairs ``(rows[k], cols[k])``.
+    Subclasses define ``_pack(packed)`` (what the compiled loop reads), ``_pairs()``, a
+    picklable function ``(left, right, rows, cols, n_parts, bandwidth)`` returning the
+    kernel values of the pairs ``(rows[k], cols[k])`` with the parts combined as
+    ``_natural`` says, and ``_natural`` itself (``"product"`` or ``"sum"``): the
+    combination of the compiled loop over the parts, the default of ``combine``.
     """
 
+    _natural = "sum"
+
     def _fit(self, X):
-        self.diagrams_ = self._fit_packed(X).samples()
+        packed = self._fit_packed(X)
+        self._positions()  # per-position parameters refused at fit, not at transform
+        self.diagrams_ = packed.samples()
+
+    def _positions(self):
+        """The bandwidth and weight of each position, or None when one bandwidth and
+        the natural combination make the compiled loop's kernel."""
+        n_parts = self.n_diagrams_
+        bandwidths = position_bandwidths(self.bandwidth, n_parts)
+        weights = position_weights(self.diagram_weights, self.combine, n_parts)
+        natural = self.combine == self._natural and self.diagram_weights is None
+        if natural and np.ndim(self.bandwidth) == 0:
+            return None
+        return bandwidths, weights
 
     def _matrix(self, left, right):
         left = as_packed(left)
         right = None if right is None else as_packed(right)
+        positions = self._positions()
+        if positions is None:
+            function = partial(
+                self._pairs(), n_parts=self.n_diagrams_, bandwidth=float(self.bandwidth)
+            )
+        else:
+            function = partial(
+                _combined_pairs,
+                function=self._pairs(),
+                n_parts=self.n_diagrams_,
+                bandwidths=positions[0],
+                weights=positions[1],
+                combine=self.combine,
+            )
         matrix = pair_matrix(
-            self._pairs(self.n_diagrams_),
+            function,
             self._pack(left),
             None if right is None else self._pack(right),
             len(left),
@@ -74,16 +111,34 @@ class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
         return check_finite_output(matrix, "kernel values").astype(self.dtype, copy=False)
 
 
-_KERNEL_CONSTRAINTS: dict = {"bandwidth": BANDWIDTH, **COMMON_CONSTRAINTS}
+def _combined_pairs(left, right, rows, cols, function, n_parts, bandwidths, weights, combine):
+    """The kernel of the pairs from the kernel of each position, with its bandwidth:
+    diagram ``sample * n_parts + part`` is sample ``sample * n_parts + part`` of one
+    part."""
+    kernels = [
+        function(left, right, rows * n_parts + part, cols * n_parts + part, 1, bandwidth)
+        for part, bandwidth in enumerate(bandwidths)
+    ]
+    return combine_positions(kernels, combine, weights)
+
+
+_KERNEL_CONSTRAINTS: dict = {
+    "bandwidth": [*BANDWIDTH, PER_POSITION],
+    "combine": [Options(COMBINATIONS)],
+    "diagram_weights": [PER_POSITION, None],
+    **COMMON_CONSTRAINTS,
+}
 
 _SECTIONS = common_sections(
     """diagrams_ : list of tuple of ndarray
         The fitted samples' finite diagrams, after the ``infinite`` policy."""
 )
 
-_BANDWIDTH = """bandwidth : float, default=1.0
+_BANDWIDTH = """bandwidth : float or array-like of shape (n_diagrams,), default=1.0
         Standard deviation ``s`` of the Gaussians, in the diagrams' units: neither so
-        small that its square underflows nor so large that the Gaussian's peak does."""
+        small that its square underflows nor so large that the Gaussian's peak does.
+        A sequence gives each diagram position its own (positions on different
+        scales)."""
 
 
 def _sliced_kernel(left, right, rows, cols, n_parts, bandwidth):
@@ -106,13 +161,15 @@ class SlicedWassersteinKernel(_DiagramKernel):
 
     Parameters
     ----------
-    bandwidth : float, default=1.0
+    bandwidth : float or array-like of shape (n_diagrams,), default=1.0
         The scale ``sigma`` of ``exp(-SW / (2 sigma^2))``; SW is in the diagrams' units,
         and so is ``sigma^2``: neither so small that its square underflows nor so
-        large that the Gaussian's peak does.
+        large that the Gaussian's peak does. A sequence gives each diagram position its
+        own (positions on different scales).
     n_directions : int, default=10
         Number of lines: the angles ``-pi/2 + k pi / (n_directions + 1)``,
         ``k = 0, ..., n_directions - 1`` (see Notes for gudhi's convention).
+    {COMBINE_PARAMETERS.format(default="product")}
     {_SECTIONS}
 
     See Also
@@ -135,10 +192,15 @@ class SlicedWassersteinKernel(_DiagramKernel):
     is conditionally negative definite (Carrière et al. 2017). SW is at most
     ``2 sqrt(2)`` times the 1-Wasserstein distance with the L-infinity ground metric.
 
-    A tuple of diagrams is compared as the typed disjoint union of its diagrams:
-    ``exp(-(SW_1 + ... + SW_K) / (2 bandwidth^2))``, the product of the per-position
-    kernels. Each diagram's projections are sorted once (``O(n log n)`` per line), and a
-    pair then costs one merge per line, ``O(n + m)``.
+    With ``combine="product"`` (the default), a tuple of diagrams is compared as the
+    typed disjoint union of its diagrams: ``exp(-(SW_1 + ... + SW_K) / (2 bandwidth^2))``,
+    the product of the per-position kernels. ``combine="sum"`` gives
+    ``sum_k w_k exp(-SW_k / (2 sigma_k^2))`` (the sum of PersLay's graph kernels, one
+    term per diagram), which a single far position cannot drive to 0. Each diagram's
+    projections are sorted once (``O(n log n)`` per line), and a pair then costs one
+    merge per line, ``O(n + m)``. To search the bandwidth without computing the
+    distances again for each candidate, compute them once with
+    :class:`PerDiagramDistance` and make the kernel with :class:`DistanceKernel`.
 
     Examples
     --------
@@ -158,10 +220,14 @@ class SlicedWassersteinKernel(_DiagramKernel):
         "n_directions": [Interval(Integral, 1, None, closed="left")],
     }
 
+    _natural = "product"
+
     def __init__(
         self,
         bandwidth=1.0,
         n_directions=10,
+        combine="product",
+        diagram_weights=None,
         infinite="drop",
         n_jobs=None,
         dtype="float64",
@@ -169,14 +235,15 @@ class SlicedWassersteinKernel(_DiagramKernel):
     ):
         self.bandwidth = bandwidth
         self.n_directions = n_directions
+        self.combine, self.diagram_weights = combine, diagram_weights
         self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _pack(self, packed):
         return pack_for_metric(packed, SLICED, self.n_directions)
 
-    def _pairs(self, n_parts):
-        return partial(_sliced_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
+    def _pairs(self):
+        return _sliced_kernel
 
 
 @numba.njit(cache=True)
@@ -240,6 +307,7 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
     Parameters
     ----------
     {_BANDWIDTH}
+    {COMBINE_PARAMETERS.format(default="sum")}
     {_SECTIONS}
 
     See Also
@@ -265,7 +333,8 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
     diagonal. Cost: ``n m`` pairs of exponentials per pair of diagrams.
 
     A tuple of diagrams is compared as the typed disjoint union of its diagrams (each
-    on its own copy of the plane): the kernel is the sum of the per-position kernels.
+    on its own copy of the plane): the kernel is the sum of the per-position kernels
+    (``combine="sum"``, the default).
 
     Examples
     --------
@@ -281,17 +350,25 @@ class PersistenceScaleSpaceKernel(_DiagramKernel):
     _parameter_constraints: dict = dict(_KERNEL_CONSTRAINTS)
 
     def __init__(
-        self, bandwidth=1.0, infinite="drop", n_jobs=None, dtype="float64", essential="deprecated"
+        self,
+        bandwidth=1.0,
+        combine="sum",
+        diagram_weights=None,
+        infinite="drop",
+        n_jobs=None,
+        dtype="float64",
+        essential="deprecated",
     ):
         self.bandwidth = bandwidth
+        self.combine, self.diagram_weights = combine, diagram_weights
         self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
     def _pack(self, packed):
         return packed.points, packed.offsets
 
-    def _pairs(self, n_parts):
-        return partial(_scale_space_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
+    def _pairs(self):
+        return _scale_space_kernel
 
 
 @numba.njit(cache=True)
@@ -350,6 +427,7 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
     ----------
     {_BANDWIDTH}
     {WEIGHT_PARAMETER}
+    {COMBINE_PARAMETERS.format(default="sum")}
     {_SECTIONS}
 
     See Also
@@ -370,9 +448,9 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
     al. also apply a Gaussian kernel on top of it (``exp(-|E(F) - E(G)|^2 / (2 tau^2))``,
     with ``|E(F) - E(G)|^2 = k(F, F) + k(G, G) - 2 k(F, G)``).
 
-    Tuples of diagrams: the sum of the per-position kernels, as for
-    :class:`PersistenceScaleSpaceKernel`. Weights are computed once per diagram; a pair
-    costs ``n m`` exponentials.
+    Tuples of diagrams: the sum of the per-position kernels (``combine="sum"``, the
+    default), as for :class:`PersistenceScaleSpaceKernel`. Weights are computed once per
+    diagram; a pair costs ``n m`` exponentials.
 
     Examples
     --------
@@ -394,6 +472,8 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
         bandwidth=1.0,
         weight="constant",
         power=1.0,
+        combine="sum",
+        diagram_weights=None,
         infinite="drop",
         n_jobs=None,
         dtype="float64",
@@ -402,6 +482,7 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
         self.bandwidth = bandwidth
         self.weight = weight
         self.power = power
+        self.combine, self.diagram_weights = combine, diagram_weights
         self.infinite, self.n_jobs, self.dtype = infinite, n_jobs, dtype
         self.essential = essential
 
@@ -410,5 +491,5 @@ class PersistenceWeightedGaussianKernel(_DiagramKernel):
         weights = point_weights(packed, offsets[:-1], offsets[1:], self.weight, self.power)
         return packed.points, weights, offsets
 
-    def _pairs(self, n_parts):
-        return partial(_weighted_gaussian_kernel, n_parts=n_parts, bandwidth=float(self.bandwidth))
+    def _pairs(self):
+        return _weighted_gaussian_kernel

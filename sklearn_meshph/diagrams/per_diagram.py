@@ -1,0 +1,168 @@
+"""PerDiagramDistance: the distance matrix of each diagram position, cached, so that a
+kernel made from them (:class:`DistanceKernel`) can be searched over its bandwidths
+without computing the distances again."""
+
+from __future__ import annotations
+
+import os
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.utils.validation import check_is_fitted, check_memory
+
+from .._base import SampleTransformer, as_sample_list
+from .._param_validation import HasMethods, Interval, Options
+from .distances import METRICS, kernel_metric
+from .estimator import DiagramTransformer
+from .pairwise import as_packed, distance_stack
+from .validation import pack_samples
+
+__all__ = ["PerDiagramDistance"]
+
+
+class PerDiagramDistance(DiagramTransformer):
+    """The distance matrix of each diagram position to the fitted samples, stacked:
+    the first stage of a kernel whose bandwidths are searched.
+
+    ``fit`` stores the samples, ``transform(X)`` returns the ``(len(X), n_fitted,
+    n_diagrams)`` array whose ``[i, j, k]`` is the distance between diagram ``k`` of
+    ``X[i]`` and of the fitted sample ``j``, and ``fit_transform(X)`` the symmetric
+    stack of ``X``, each unordered pair computed once. :class:`DistanceKernel` turns it
+    into a kernel (a bandwidth per position, a sum or a product of the positions'
+    kernels); :class:`DiagramDistance` gives the positions' combined distance instead.
+
+    Parameters
+    ----------
+    metric : {"sliced-wasserstein", "bottleneck", "wasserstein"}, default="sliced-wasserstein"
+        As :class:`DiagramDistance`'s; the default is the distance of the sliced
+        Wasserstein kernel, ``exp(-SW / (2 sigma^2))``.
+    order : float, default=2.0
+        The Wasserstein exponent q (``metric="wasserstein"`` only).
+    internal_p : float, default=inf
+        Ground metric between points, the L-p norm (bottleneck and Wasserstein).
+    n_directions : int, default=10
+        Number of lines of the sliced Wasserstein distance (ignored by the others).
+    memory : str, path, joblib.Memory or None, default=None
+        Where to cache the stacks that ``fit_transform`` and ``transform`` compute,
+        keyed by the diagrams of both sides and the distance parameters. A grid search
+        over the parameters of the later stages (the kernel's bandwidths, the
+        classifier's ``C``) then computes each fold's distances once, its training
+        stack at the first candidate and its test stack at the first score, instead of
+        once per candidate (a pipeline's own ``memory`` caches ``fit_transform`` only).
+        ``None``: no caching.
+    n_jobs : int, default=None
+        Number of parallel jobs (joblib). ``None`` means 1 unless in a
+        :func:`joblib.parallel_backend` context; ``-1`` means all processors. Results
+        are identical for any ``n_jobs`` (which is not part of the cache key).
+    dtype : {"float64", "float32"}, default="float64"
+        Of the returned stack (distances are computed in float64); ``"float32"`` halves
+        the memory of large stacks.
+
+    Attributes
+    ----------
+    diagrams_ : list of tuple of ndarray
+        The fitted samples, validated.
+    n_diagrams_ : int
+        Number of diagrams per sample.
+
+    See Also
+    --------
+    DistanceKernel : The kernel of the stacks, with a bandwidth per position.
+    DiagramDistance : The combined distance of the positions.
+    pairwise_diagram_distances : The same stack with ``per_diagram=True``.
+
+    Notes
+    -----
+    The output is a 3-d array, not a table: it has no feature names, and it passes
+    through ``set_output(transform="pandas")`` as it is. Each pair's distance does not
+    depend on the blocks it is computed in, so ``transform`` of the fitted samples
+    equals ``fit_transform`` bit for bit, and a precomputed stack of all the samples
+    (:func:`pairwise_diagram_distances` with ``per_diagram=True``), sliced by a
+    cross-validation, holds the same values as the folds' stacks.
+
+    Examples
+    --------
+    A grid search over the bandwidth of a sum of sliced Wasserstein kernels, one per
+    diagram position, computing the distances of each fold once:
+
+    >>> import numpy as np
+    >>> from sklearn.model_selection import GridSearchCV
+    >>> from sklearn.pipeline import make_pipeline
+    >>> from sklearn.svm import SVC
+    >>> from sklearn_meshph import DistanceKernel, PerDiagramDistance
+    >>> rng = np.random.default_rng(0)
+    >>> def sample(label):
+    ...     births = rng.random(4)
+    ...     return tuple(np.column_stack([births, births + 0.1 + label * k]) for k in (1, 2))
+    >>> X, y = [sample(i % 2) for i in range(12)], np.arange(12) % 2
+    >>> model = make_pipeline(
+    ...     PerDiagramDistance(memory=None),  # a folder caches the distances
+    ...     DistanceKernel(combine="sum"),
+    ...     SVC(kernel="precomputed"),
+    ... )
+    >>> search = GridSearchCV(model, {"distancekernel__bandwidth": [0.5, 1.0]}, cv=3)
+    >>> search.fit(X, y).best_score_
+    np.float64(1.0)
+    """
+
+    _parameter_constraints: dict = {
+        "metric": [Options(METRICS)],
+        "order": [Interval(Real, 1, None, closed="left")],
+        "internal_p": [Interval(Real, 1, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "n_jobs": [Integral, None],
+        "dtype": [Options(("float64", "float32"))],
+    }
+
+    def __init__(
+        self,
+        metric="sliced-wasserstein",
+        order=2.0,
+        internal_p=np.inf,
+        n_directions=10,
+        memory=None,
+        n_jobs=None,
+        dtype="float64",
+    ):
+        self.metric = metric
+        self.order = order
+        self.internal_p = internal_p
+        self.n_directions = n_directions
+        self.memory = memory
+        self.n_jobs = n_jobs
+        self.dtype = dtype
+
+    def _fit(self, X):
+        X = as_sample_list(X, "diagrams")  # read once: X may be a generator
+        SampleTransformer.fit(self, X)
+        kernel_metric(self.metric, self.order, self.internal_p)  # refused now, not later
+        packed = pack_samples(X)
+        self.diagrams_ = packed.samples()
+        self.n_diagrams_ = packed.n_diagrams
+        return packed
+
+    def _fit_output(self, packed):
+        return self._stack(packed, None)
+
+    def _validate(self, X):
+        check_is_fitted(self, "n_diagrams_")
+        self._check_params()
+        return pack_samples(X, n_diagrams=self.n_diagrams_)
+
+    def _output(self, packed):
+        return self._stack(packed, as_packed(self.diagrams_))
+
+    def _stack(self, left, right):
+        memory = os.fspath(self.memory) if isinstance(self.memory, os.PathLike) else self.memory
+        compute = check_memory(memory).cache(distance_stack, ignore=["n_jobs"])
+        return compute(
+            left,
+            right,
+            self.metric,
+            float(self.order),
+            float(self.internal_p),
+            int(self.n_directions),
+            np.dtype(self.dtype),
+            n_jobs=self.n_jobs,
+        )
