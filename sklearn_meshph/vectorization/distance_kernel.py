@@ -87,27 +87,21 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
 
     Examples
     --------
-    All the samples' distances once, then a grid search on the precomputed stack:
+    Two samples of two diagrams each, at sliced Wasserstein distances 1 (first
+    diagrams) and 2 (second diagrams), each position with its own bandwidth:
 
     >>> import numpy as np
-    >>> from sklearn.model_selection import GridSearchCV
-    >>> from sklearn.pipeline import make_pipeline
-    >>> from sklearn.svm import SVC
-    >>> from sklearn_meshph import DistanceKernel, pairwise_diagram_distances
-    >>> rng = np.random.default_rng(0)
-    >>> def sample(label):
-    ...     births = rng.random(4)
-    ...     return tuple(np.column_stack([births, births + 0.1 + label * k]) for k in (1, 2))
-    >>> X, y = [sample(i % 2) for i in range(12)], np.arange(12) % 2
-    >>> stack = pairwise_diagram_distances(X, metric="sliced-wasserstein", per_diagram=True)
-    >>> stack.shape
-    (12, 12, 2)
-    >>> model = make_pipeline(
-    ...     DistanceKernel(normalization="median", combine="sum"), SVC(kernel="precomputed")
-    ... )
-    >>> grid = {{"distancekernel__bandwidth": [0.5, 1.0, [0.5, 2.0]]}}
-    >>> GridSearchCV(model, grid, cv=3).fit(stack, y).best_score_
-    np.float64(1.0)
+    >>> from sklearn_meshph import DistanceKernel
+    >>> stack = np.array([[[0.0, 0.0], [1.0, 2.0]], [[1.0, 2.0], [0.0, 0.0]]])
+    >>> kernel = DistanceKernel(bandwidth=[1.0, 2.0], combine="mean")
+    >>> kernel.fit_transform(stack).round(3)
+    array([[1.   , 0.693],
+           [0.693, 1.   ]])
+
+    The search over the bandwidths of a pipeline starting with this kernel slices a
+    precomputed stack of all the samples (:func:`pairwise_diagram_distances` with
+    ``per_diagram=True``) into the folds' blocks; see :class:`PerDiagramDistance` for a
+    pipeline from the diagrams.
     """
 
     _requires_fit = True
