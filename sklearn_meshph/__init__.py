@@ -29,7 +29,7 @@ from .diagrams import (
     to_persim,
     wasserstein_distance,
 )
-from .graph import Graph, check_graph
+from .graph import Graph, check_graph, load_tu_dataset
 from .mesh import (
     CleaningReport,
     MeshCleaningWarning,
@@ -42,6 +42,7 @@ from .persistence import LowerStarPersistence, extended_persistence, lower_star_
 from .pipelines import make_mesh_distance
 from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
+from .retrieval import ShapeNeighbors, ShapeNeighborsClassifier, retrieval_scores
 from .spectral import (
     CacheWarning,
     ConstantEigenfunctionWarning,
@@ -72,6 +73,8 @@ __all__ = [
     "RepeatedEigenvalueWarning",
     "ScalarField",
     "ShapeDNA",
+    "ShapeNeighbors",
+    "ShapeNeighborsClassifier",
     "bottleneck_distance",
     "check_graph",
     "check_mesh",
@@ -85,12 +88,14 @@ __all__ = [
     "graph_laplacian",
     "laplacian_eigenfunctions",
     "load_mesh_folder",
+    "load_tu_dataset",
     "lower_star_persistence",
     "make_mesh_distance",
     "make_shapes",
     "point_cloud_laplacian",
     "sample_point_cloud",
     "pairwise_diagram_distances",
+    "retrieval_scores",
     "sliced_wasserstein_distance",
     "to_giotto",
     "to_gudhi",

@@ -126,10 +126,10 @@ class Graph:
             raise ValueError(f"{place}: an edge has a node outside 0..{n_nodes - 1}")
         if not (i < j).all():
             raise ValueError(f"{place}: each edge must be given as (i, j) with i < j")
-        step = np.diff(i)
-        if not ((step > 0) | ((step == 0) & (np.diff(j) > 0))).all():
+        keys = i * n_nodes + j  # increasing exactly when the rows are sorted and unique
+        if not (keys[1:] > keys[:-1]).all():
             raise ValueError(f"{place}: edges must be sorted rows without repeats")
-        if not (np.isfinite(weights) & (weights > 0)).all():
+        if not ((weights > 0) & (weights < np.inf)).all():  # NaN fails both
             raise ValueError(f"{place}: edge weights must be positive and finite")
         node_values = _check_node_values(self.node_values, n_nodes, place)
         object.__setattr__(self, "n_nodes", n_nodes)

@@ -1,0 +1,257 @@
+"""Reading graph datasets in the TU text format (Morris et al., TUDataset, 2020).
+
+A TU dataset ``DS`` is a folder of text files, numbers separated by commas, one record a
+line, each file plain or compressed (``.gz``, ``.bz2``, ``.xz``):
+
+- ``DS_A.txt``: ``i, j`` per directed edge; node ids are 1-based and count the nodes of
+  all the graphs;
+- ``DS_graph_indicator.txt``: line ``k`` holds the graph id (1-based) of node ``k``: the
+  nodes of a graph are consecutive, graph ids start at 1 and have no gaps;
+- ``DS_graph_labels.txt``: line ``g`` holds the class of graph ``g``;
+- optional ``DS_node_labels.txt`` and ``DS_node_attributes.txt``: one line per node;
+  their columns (labels first) become the graphs' ``node_values``.
+
+Edge labels and attributes, graph attributes and the README are not read. Both
+directions of an edge, repeated edges and self-loops are treated as by
+:func:`sklearn_meshph.check_graph` (one edge of weight 1; loops dropped). Each file is
+parsed whole with NumPy (no Python loop over its lines), never beyond
+``MAX_TU_FILE_SIZE`` bytes once decompressed; nothing in a file is executed.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import warnings
+
+import numpy as np
+
+from ..mesh.reading import COMPRESSIONS, decompress, split_compression
+from .validation import Graph
+
+__all__ = ["MAX_TU_FILE_SIZE", "load_tu_dataset", "tu_dataset_names"]
+
+#: Largest size of one file of a TU dataset, in bytes (1 GiB), decompressed.
+MAX_TU_FILE_SIZE = 1024**3
+
+_ENDINGS = ("", *COMPRESSIONS)
+_INT64 = np.iinfo(np.int64)
+
+
+def _find(folder: str, name: str, part: str) -> str | None:
+    """The path of ``DS_part.txt`` in ``folder``, plain first, then compressed."""
+    for ending in _ENDINGS:
+        path = os.path.join(folder, f"{name}_{part}.txt{ending}")
+        if os.path.isfile(path):
+            return path
+    return None
+
+
+def tu_dataset_names(folder) -> list[str]:
+    """The names ``DS`` of the TU datasets in ``folder`` (those with a ``DS_A.txt`` and
+    a ``DS_graph_indicator.txt``, plain or compressed), sorted; empty for any other
+    folder or a path that is not a folder."""
+    folder = os.fspath(folder)
+    if not os.path.isdir(folder):
+        return []
+    pattern = re.compile(r"(.+)_A\.txt(" + "|".join(map(re.escape, COMPRESSIONS)) + r")?")
+    names = {m.group(1) for f in os.listdir(folder) if (m := pattern.fullmatch(f))}
+    return sorted(n for n in names if _find(folder, n, "graph_indicator") is not None)
+
+
+def _content(path: str, place: str) -> bytes:
+    _, compression = split_compression(path)
+    if compression is not None:
+        return decompress(path, compression, place, MAX_TU_FILE_SIZE, "TU file").getvalue()
+    if os.path.getsize(path) > MAX_TU_FILE_SIZE:
+        raise ValueError(
+            f"{place}: TU file {path!r} is larger than {MAX_TU_FILE_SIZE} bytes "
+            "(the limit, MAX_TU_FILE_SIZE); refusing to read it"
+        )
+    with open(path, "rb") as stream:
+        return stream.read()
+
+
+def _bad_line(content: bytes, dtype, width: int | None) -> str:
+    """Where and why ``content`` is not a table of ``dtype`` (the error path only)."""
+    number = 0
+    for number, line in enumerate(content.splitlines(), start=1):
+        fields = [f.strip() for f in line.decode("latin-1").split(",")]
+        if fields == [""]:
+            continue
+        width = len(fields) if width is None else width
+        if len(fields) != width:
+            return f"line {number} holds {len(fields)} values where {width} are expected"
+        for text in fields:
+            try:
+                value = int(text) if dtype is np.int64 else float(text)
+            except ValueError:
+                kind = "an integer" if dtype is np.int64 else "a number"
+                return f"line {number} holds {text[:40]!r}, not {kind}"
+            if dtype is np.int64 and not _INT64.min <= value <= _INT64.max:
+                return f"line {number} holds {value}, beyond 64-bit integers"
+    return f"line {number} cannot be read"
+
+
+def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
+    """The numbers of a TU file as a 2-d array: a row per non-blank line, ``width``
+    columns (any width, the same on every line, when None)."""
+    content = _content(path, place)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # an empty file: no rows
+            table = np.loadtxt(
+                io.BytesIO(content), delimiter=",", dtype=dtype, ndmin=2, comments=None
+            )
+    except ValueError:
+        table = None
+    if table is not None and table.size == 0:
+        table = np.empty((0, width or 1), dtype=dtype)
+    if table is None or (width is not None and table.shape[1] != width):
+        reason = _bad_line(content, dtype, width)
+        raise ValueError(f"{place}: cannot read TU file {path!r}: {reason}")
+    if dtype is np.float64 and not np.isfinite(table).all():
+        line = int(np.flatnonzero(~np.isfinite(table).all(axis=1))[0]) + 1
+        raise ValueError(f"{place}: TU file {path!r}: line {line} holds a NaN or infinity")
+    return table
+
+
+def _row_error(place: str, path: str, row: int, problem: str):
+    return ValueError(f"{place}: TU file {path!r}: line {row + 1}: {problem}")
+
+
+def _graph_ids(path: str, place: str) -> np.ndarray:
+    """The 1-based graph id of each node, checked: from 1, steps of 0 or 1."""
+    ids = _table(path, np.int64, 1, place)[:, 0]
+    if not len(ids):
+        raise ValueError(f"{place}: TU file {path!r} holds no nodes")
+    if ids[0] != 1:
+        raise _row_error(place, path, 0, f"the first graph id is {ids[0]}, expected 1")
+    steps = np.diff(ids)
+    bad = np.flatnonzero((steps < 0) | (steps > 1))
+    if len(bad):
+        k = int(bad[0]) + 1
+        raise _row_error(
+            place,
+            path,
+            k,
+            f"graph id {ids[k]} follows {ids[k - 1]}: graph ids must not decrease nor skip "
+            "(the nodes of a graph on consecutive lines, graphs numbered 1, 2, ...)",
+        )
+    return ids
+
+
+def _node_values(folder: str, name: str, n_nodes: int, place: str):
+    """The node labels and attributes as columns (labels first), or None."""
+    columns = []
+    for part, dtype in (("node_labels", np.int64), ("node_attributes", np.float64)):
+        path = _find(folder, name, part)
+        if path is None:
+            continue
+        table = _table(path, dtype, None, place)
+        if len(table) != n_nodes:
+            raise ValueError(
+                f"{place}: TU file {path!r} holds {len(table)} lines for {n_nodes} nodes"
+            )
+        columns.append(table.astype(np.float64))
+    return np.hstack(columns) if columns else None
+
+
+def _edges(path: str, ids: np.ndarray, place: str):
+    """The edges as sorted unique 0-based ``(low, high)`` node pairs, checked: node ids
+    in range, both ends in one graph; self-loops dropped."""
+    pairs = _table(path, np.int64, 2, place)
+    n_nodes = len(ids)
+    outside = (pairs < 1) | (pairs > n_nodes)
+    if outside.any():
+        row = int(np.flatnonzero(outside.any(axis=1))[0])
+        value = pairs[row][outside[row]][0]
+        raise _row_error(place, path, row, f"node id {value} is outside 1..{n_nodes}")
+    pairs = pairs - 1
+    graphs = ids[pairs]
+    across = graphs[:, 0] != graphs[:, 1]
+    if across.any():
+        row = int(np.flatnonzero(across)[0])
+        i, j = pairs[row] + 1
+        raise _row_error(
+            place,
+            path,
+            row,
+            f"edge ({i}, {j}) joins graph {graphs[row, 0]} and graph {graphs[row, 1]}",
+        )
+    low, high = pairs.min(axis=1), pairs.max(axis=1)
+    keys = np.sort((low * n_nodes + high)[low != high])
+    keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if len(keys) else keys
+    return keys // n_nodes, keys % n_nodes
+
+
+def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.ndarray]:
+    """The graphs and labels of a TU dataset folder.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        A folder holding ``DS_A.txt``, ``DS_graph_indicator.txt`` and
+        ``DS_graph_labels.txt`` (each plain or compressed), optionally
+        ``DS_node_labels.txt`` and ``DS_node_attributes.txt``.
+    name : str, optional
+        The dataset's name ``DS``; by default the one dataset of the folder.
+
+    Returns
+    -------
+    graphs : list of Graph
+        Graph ``g`` (0-based) is graph ``g + 1`` of the files: its nodes in file order,
+        its edges of weight 1, ``node_values`` the node labels then the node attributes
+        (None when the folder has neither).
+    y : ndarray of shape (n_graphs,), int64
+        The graph labels as written in the file.
+
+    Raises
+    ------
+    ValueError
+        When ``folder`` holds no TU dataset (or several, and ``name`` is not given), a
+        file is missing, larger than ``MAX_TU_FILE_SIZE`` or not valid compressed data,
+        a line is not integers (numbers for attributes) or has the wrong count, a node
+        id is out of range, an edge joins two graphs, graph ids decrease or skip, or a
+        file's line count does not match the nodes or graphs. The message names the
+        file (and the line).
+    """
+    folder = os.fspath(folder)
+    if not os.path.isdir(folder):
+        raise ValueError(f"TU dataset folder {folder!r} does not exist or is not a folder")
+    if name is None:
+        names = tu_dataset_names(folder)
+        if len(names) != 1:
+            found = f"datasets {', '.join(names)}; pass name=" if names else "no TU dataset"
+            raise ValueError(
+                f"TU dataset folder {folder!r} holds {found} (a TU dataset DS is the files "
+                "DS_A.txt, DS_graph_indicator.txt and DS_graph_labels.txt, plain or .gz)"
+            )
+        name = names[0]
+    place = f"TU dataset {name}"
+    paths = {}
+    for part in ("A", "graph_indicator", "graph_labels"):
+        paths[part] = _find(folder, name, part)
+        if paths[part] is None:
+            expected = os.path.join(folder, f"{name}_{part}.txt")
+            raise ValueError(f"{place}: TU file {expected!r} (or .gz) does not exist")
+    ids = _graph_ids(paths["graph_indicator"], place)
+    n_graphs = int(ids[-1])
+    y = _table(paths["graph_labels"], np.int64, 1, place)[:, 0]
+    if len(y) != n_graphs:
+        raise ValueError(
+            f"{place}: TU file {paths['graph_labels']!r} holds {len(y)} labels for "
+            f"{n_graphs} graphs (in {paths['graph_indicator']!r})"
+        )
+    low, high = _edges(paths["A"], ids, place)
+    values = _node_values(folder, name, len(ids), place)
+    starts = np.r_[0, np.flatnonzero(np.diff(ids)) + 1, len(ids)]
+    bounds = np.searchsorted(low, starts)
+    local = np.column_stack([low, high]) - starts[ids[low] - 1][:, None]
+    graphs = []
+    for g in range(n_graphs):
+        first, last, edges = starts[g], starts[g + 1], local[bounds[g] : bounds[g + 1]]
+        nodes = None if values is None else values[first:last]
+        graphs.append(Graph(int(last - first), edges, np.ones(len(edges)), nodes))
+    return graphs, y

@@ -1,0 +1,159 @@
+"""TU datasets: the text format read into graphs and labels, every bad file named; the
+six shared datasets as their README describes them."""
+
+import gzip
+
+import numpy as np
+import pytest
+from conftest import data_folder
+
+from sklearn_meshph import Graph, load_tu_dataset
+from sklearn_meshph.graph import reading, tu_dataset_names
+
+# Three graphs: a path 1-2-3 (both directions, a repeat), an edge 4-5 with a loop on 4,
+# and node 6 alone. Labels as the file writes them (-1 and 1).
+TINY = {
+    "A": "1, 2\n2, 1\n2, 3\n3, 2\n2, 3\n4, 4\n5, 4\n4, 5\n",
+    "graph_indicator": "1\n1\n1\n2\n2\n3\n",
+    "graph_labels": "-1\n1\n1\n",
+    "node_labels": "0\n1\n0\n2\n2\n1\n",
+}
+
+
+def write_tu(folder, files, name="TINY", compress=False):
+    folder.mkdir(parents=True, exist_ok=True)
+    for part, text in files.items():
+        path = folder / f"{name}_{part}.txt"
+        if compress:
+            with gzip.open(f"{path}.gz", "wt") as stream:
+                stream.write(text)
+        else:
+            path.write_text(text)
+    return folder
+
+
+def _check_tiny(graphs, y):
+    assert len(graphs) == 3 and all(isinstance(g, Graph) for g in graphs)
+    assert y.dtype == np.int64 and y.tolist() == [-1, 1, 1]
+    assert [g.n_nodes for g in graphs] == [3, 2, 1]
+    assert [g.edges.tolist() for g in graphs] == [[[0, 1], [1, 2]], [[0, 1]], []]
+    assert all((g.weights == 1).all() for g in graphs)
+    assert [g.node_values.ravel().tolist() for g in graphs] == [[0, 1, 0], [2, 2], [1]]
+
+
+@pytest.mark.parametrize("compress", [False, True])
+def test_a_tiny_dataset_gives_its_graphs_and_labels(tmp_path, compress):
+    folder = write_tu(tmp_path / "tiny", TINY, compress=compress)
+    _check_tiny(*load_tu_dataset(folder))
+    assert tu_dataset_names(folder) == ["TINY"]
+
+
+def test_plain_and_compressed_files_mix_and_attributes_follow_labels(tmp_path):
+    folder = write_tu(tmp_path, {k: TINY[k] for k in ("A", "graph_indicator")})
+    write_tu(tmp_path, {k: TINY[k] for k in ("graph_labels", "node_labels")}, compress=True)
+    attributes = "0.5, 1\n1.5, 2\n2.5, 3\n3.5, 4\n4.5, 5\n5.5, 6\n"
+    write_tu(tmp_path, {"node_attributes": attributes, "edge_labels": "x\n"})
+    graphs, y = load_tu_dataset(str(folder))
+    assert y.tolist() == [-1, 1, 1]
+    np.testing.assert_array_equal(graphs[1].node_values, [[2, 3.5, 4], [2, 4.5, 5]])
+    assert graphs[2].node_values.shape == (1, 3)
+
+
+def test_without_node_files_graphs_have_no_node_values(tmp_path):
+    folder = write_tu(tmp_path, {k: v for k, v in TINY.items() if k != "node_labels"})
+    graphs, _ = load_tu_dataset(folder)
+    assert all(g.node_values is None for g in graphs)
+
+
+def test_the_dataset_is_named_when_a_folder_holds_several(tmp_path):
+    write_tu(tmp_path, TINY)
+    write_tu(tmp_path, {**TINY, "graph_labels": "5\n6\n7\n"}, name="OTHER")
+    assert tu_dataset_names(tmp_path) == ["OTHER", "TINY"]
+    with pytest.raises(ValueError, match="holds datasets OTHER, TINY; pass name="):
+        load_tu_dataset(tmp_path)
+    assert load_tu_dataset(tmp_path, name="OTHER")[1].tolist() == [5, 6, 7]
+    _check_tiny(*load_tu_dataset(tmp_path, name="TINY"))
+
+
+def test_other_folders_are_not_tu_datasets(tmp_path):
+    write_tu(tmp_path / "a", {"A": TINY["A"]})  # no graph indicator
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "notes_A.txt.zip").write_text("1, 2\n")
+    for folder in (tmp_path / "a", tmp_path / "b", tmp_path / "missing"):
+        assert tu_dataset_names(folder) == []
+    with pytest.raises(ValueError, match="holds no TU dataset"):
+        load_tu_dataset(tmp_path / "a")
+    with pytest.raises(ValueError, match="does not exist or is not a folder"):
+        load_tu_dataset(tmp_path / "missing")
+
+
+BAD_FILES = [
+    ({"graph_labels": None}, r"TINY_graph_labels.txt' \(or .gz\) does not exist"),
+    ({"A": "1, 2\n2, x\n"}, r"TINY_A.txt': line 2 holds 'x', not an integer"),
+    ({"A": "1, 2\n\n2, 3, 1\n"}, r"TINY_A.txt': line 3 holds 3 values where 2 are expected"),
+    ({"A": "1.0, 2.0\n"}, r"TINY_A.txt': line 1 holds '1.0', not an integer"),
+    ({"A": "1\n"}, r"TINY_A.txt': line 1 holds 1 values where 2 are expected"),
+    ({"A": "1, 2\n" * 3 + "7, 6\n"}, r"TINY_A.txt': line 4: node id 7 is outside 1..6"),
+    ({"A": "0, 1\n"}, r"TINY_A.txt': line 1: node id 0 is outside 1..6"),
+    ({"A": "99999999999999999999, 1\n"}, "line 1 holds 99999999999999999999, beyond 64-bit"),
+    ({"A": "1, 2\n3, 4\n"}, r"TINY_A.txt': line 2: edge \(3, 4\) joins graph 1 and graph 2"),
+    ({"graph_indicator": "1\n1\n2\n1\n2\n3\n"}, "line 4: graph id 1 follows 2: graph ids must"),
+    ({"graph_indicator": "1\n1\n1\n2\n2\n4\n"}, "line 6: graph id 4 follows 2: graph ids must"),
+    ({"graph_indicator": "2\n2\n2\n3\n3\n4\n"}, "line 1: the first graph id is 2, expected 1"),
+    ({"graph_indicator": ""}, "TINY_graph_indicator.txt' holds no nodes"),
+    ({"graph_labels": "1\n1\n"}, r"graph_labels.txt' holds 2 labels for 3 graphs \(in .*"),
+    ({"graph_labels": "1\n1\n1\n1\n"}, "graph_labels.txt' holds 4 labels for 3 graphs"),
+    ({"graph_labels": "1\nA\n1\n"}, "graph_labels.txt': line 2 holds 'A', not an integer"),
+    ({"node_labels": "0\n1\n"}, "node_labels.txt' holds 2 lines for 6 nodes"),
+    ({"node_attributes": "1\n2\n3\n4\nnan\n6\n"}, "attributes.txt': line 5 holds a NaN"),
+    ({"node_attributes": "1\n2\n3\n4\n5\nsix\n"}, "line 6 holds 'six', not a number"),
+    ({"node_attributes": "1, 2\n2\n3\n4\n5\n6\n"}, "line 2 holds 1 values where 2 are"),
+]
+
+
+@pytest.mark.parametrize("change, message", BAD_FILES)
+def test_a_bad_file_is_named_with_its_line(tmp_path, change, message):
+    files = {k: v for k, v in {**TINY, **change}.items() if v is not None}
+    folder = write_tu(tmp_path, files)
+    with pytest.raises(ValueError, match=f"^TU dataset TINY: .*{message}"):
+        load_tu_dataset(folder)
+
+
+def test_a_corrupt_compressed_file_is_named(tmp_path):
+    folder = write_tu(tmp_path, TINY)
+    (folder / "TINY_A.txt").unlink()
+    (folder / "TINY_A.txt.gz").write_bytes(b"not gzip at all")
+    with pytest.raises(ValueError, match=r"cannot decompress TU file .*TINY_A.txt.gz"):
+        load_tu_dataset(folder)
+
+
+@pytest.mark.parametrize("compress", [False, True])
+def test_files_beyond_the_size_limit_are_refused(tmp_path, monkeypatch, compress):
+    folder = write_tu(tmp_path, TINY, compress=compress)
+    monkeypatch.setattr(reading, "MAX_TU_FILE_SIZE", 20)
+    with pytest.raises(ValueError, match=r"TINY_A.txt(.gz)?'.* than 20 bytes"):
+        load_tu_dataset(folder)
+
+
+# The shared datasets (skipped without them) -------------------------------------
+
+# From /work/shared/data/tu/README.md: graphs, class counts, mean nodes, mean edges.
+README_TABLE = {
+    "MUTAG": (188, [63, 125], 17.9, 19.8),
+    "COX2": (467, [365, 102], 41.2, 43.4),
+    "DHFR": (756, [295, 461], 42.4, 44.5),
+    "PROTEINS": (1113, [663, 450], 39.1, 72.8),
+    "NCI1": (4110, [2053, 2057], 29.9, 32.3),
+    "IMDB-BINARY": (1000, [500, 500], 19.8, 96.5),
+}
+
+
+@pytest.mark.parametrize("name", README_TABLE)
+def test_the_shared_datasets_match_their_readme(name):
+    folder = data_folder(f"tu/{name}", "TU")
+    graphs, y = load_tu_dataset(folder)
+    n_graphs, counts, mean_nodes, mean_edges = README_TABLE[name]
+    assert len(graphs) == len(y) == n_graphs
+    assert np.unique(y, return_counts=True)[1].tolist() == counts
+    assert round(np.mean([g.n_nodes for g in graphs]), 1) == mean_nodes
+    assert round(np.mean([g.n_edges for g in graphs]), 1) == mean_edges
