@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from sklearn.base import clone
-from sklearn.model_selection import GridSearchCV, KFold
+from sklearn.model_selection import GridSearchCV, KFold, cross_val_score
 from sklearn.pipeline import make_pipeline
 from sklearn.svm import SVC
 from sklearn.utils import get_tags
@@ -306,6 +306,11 @@ def test_distance_kernel_checks_its_input():
     infinite = stack.copy()
     infinite[0, 1, 0] = infinite[1, 0, 0] = np.inf
     assert kernel.fit_transform(infinite)[0, 1] == 0.0
+    # A float32 stack (PerDiagramDistance(dtype="float32")) is read as it is.
+    single = PerDiagramDistance(dtype="float32").fit_transform(random_samples(4, 2, seed=21))
+    matrix = kernel.fit_transform(single)
+    assert matrix.dtype == np.float64
+    np.testing.assert_allclose(matrix, kernel.fit_transform(stack), rtol=1e-6)
 
 
 def test_distance_kernel_api(estimator_round_trip):
@@ -386,3 +391,21 @@ def test_grid_search_on_a_precomputed_stack_gives_the_same_scores(monkeypatch):
     ).fit(samples, y)
     for key in ("split0_test_score", "split1_test_score", "split2_test_score"):
         np.testing.assert_array_equal(on_stack.cv_results_[key], on_samples.cv_results_[key])
+
+
+def test_nested_cross_validation_on_a_precomputed_stack(monkeypatch):
+    """The outer split slices the stack too (the search is pairwise as its pipeline):
+    the same scores as from the diagrams, and no distance computed after the stack."""
+    samples, y = toy_classes(24, seed=25)
+    stack = pairwise_diagram_distances(samples, metric="sliced-wasserstein", per_diagram=True)
+    calls = count_distance_matrices(monkeypatch)
+    kernel = DistanceKernel(normalization="median", combine="sum")
+    grid = {"distancekernel__bandwidth": [0.3, 3.0]}
+    inner = GridSearchCV(make_pipeline(kernel, SVC(kernel="precomputed")), grid, cv=KFold(3))
+    outer = KFold(4, shuffle=True, random_state=0)
+    on_stack = cross_val_score(inner, stack, y, cv=outer)
+    assert calls == []
+    search = GridSearchCV(
+        make_pipeline(PerDiagramDistance(), kernel, SVC(kernel="precomputed")), grid, cv=KFold(3)
+    )
+    np.testing.assert_array_equal(cross_val_score(search, samples, y, cv=outer), on_stack)

@@ -146,14 +146,16 @@ def position_weights(weights, combine: str, n_diagrams: int) -> np.ndarray:
 
 def combine_positions(kernels, combine: str, weights: np.ndarray) -> np.ndarray:
     """The kernel of samples from the kernels of their diagram positions (equal-shape
-    arrays, one per position), combined in position order."""
+    arrays, one per position, from any iterable: a generator holds one at a time),
+    combined in position order."""
+    kernels = iter(kernels)
     if combine == "product":
-        total = kernels[0].copy()
-        for values in kernels[1:]:
+        total = next(kernels).copy()
+        for values in kernels:
             total *= values
         return total
-    total = weights[0] * kernels[0]
-    for weight, values in zip(weights[1:], kernels[1:], strict=True):
+    total = weights[0] * next(kernels)
+    for weight, values in zip(weights[1:], kernels, strict=True):
         total += weight * values
     return total / weights.sum() if combine == "mean" else total
 

@@ -82,8 +82,8 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
     bandwidths, weights and combination: each ``exp(-SW_k / (2 sigma_k^2))`` is (SW is
     conditionally negative definite), and so are their non-negative sums and their
     products. Its ``"product"`` with one bandwidth is :class:`SlicedWassersteinKernel`
-    (to rounding: the exponents are summed over the positions before one
-    exponential).
+    (to rounding: it multiplies the positions' exponentials, the kernel takes one
+    exponential of their summed exponents).
 
     Examples
     --------
@@ -172,12 +172,11 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
             )
         bandwidths = position_bandwidths(self.bandwidth, self.n_diagrams_)
         weights = position_weights(self.diagram_weights, self.combine, self.n_diagrams_)
-        exponents = [
-            (distances[:, :, k] / self.scales_[k]) / (2.0 * b * b) for k, b in enumerate(bandwidths)
-        ]
-        if self.combine == "product":
-            return np.exp(-sum(exponents[1:], exponents[0]))
-        return combine_positions([np.exp(-e) for e in exponents], self.combine, weights)
+        kernels = (
+            np.exp(-(distances[:, :, k].astype(np.float64) / scale) / (2.0 * b * b))
+            for k, (b, scale) in enumerate(zip(bandwidths, self.scales_, strict=True))
+        )
+        return combine_positions(kernels, self.combine, weights)
 
     def fit_transform(self, X, y=None):
         """Fit on the fitted samples' square distances and return their kernel.
@@ -204,11 +203,14 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
 
 
 def _distances(X) -> np.ndarray:
-    """``X`` as a float64 ``(n, m, n_diagrams)`` array of distances, refused (naming the
-    sample) when not 2-d or 3-d, sparse, negative or NaN."""
+    """``X`` as an ``(n, m, n_diagrams)`` array of distances (float32 kept: a large stack
+    is not copied), refused (naming the sample) when not 2-d or 3-d, sparse, negative or
+    NaN."""
     if sp.issparse(X):
         raise TypeError("X must be a dense array of distances, got a sparse matrix")
-    distances = np.asarray(X, dtype=np.float64)
+    distances = np.asarray(X)
+    if distances.dtype not in (np.float32, np.float64):
+        distances = distances.astype(np.float64)
     if distances.ndim not in (2, 3) or 0 in distances.shape:
         raise ValueError(
             "X must be distances of shape (n_samples, n_fitted) or (n_samples, n_fitted, "
