@@ -289,6 +289,8 @@ def test_distance_kernel_checks_its_input():
         kernel.fit(stack[0, :, 0])
     with pytest.raises(TypeError, match="got a sparse matrix"):
         kernel.fit(sp.csr_array(stack[:, :, 0]))
+    with pytest.raises(TypeError, match="real distances, got an array of dtype complex128"):
+        kernel.fit(stack + 1j)
     bad = stack.copy()
     bad[2, 1, 1] = -0.5
     with pytest.raises(ValueError, match=r"sample 2: .* fitted sample 1 \(diagram position 1\)"):
@@ -296,7 +298,7 @@ def test_distance_kernel_checks_its_input():
     bad[2, 1, 1] = np.nan
     with pytest.raises(ValueError, match="sample 2: .* is nan"):
         kernel.fit(bad)
-    kernel.fit(stack)
+    assert kernel.fit(stack).n_features_in_ == 4
     with pytest.raises(ValueError, match="expected 4 columns .* and 2 diagram positions"):
         kernel.transform(stack[:, :3])
     with pytest.raises(ValueError, match="expected 4 columns .* and 2 diagram positions"):

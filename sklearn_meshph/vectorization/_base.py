@@ -1,6 +1,8 @@
 """What the vectorizers and kernels share: the policy for infinite points, what ``fit``
 learns per diagram position, the point-weight convention, the checks of parameters at
-the edges of floating point, and the blocks of samples of the vectorizers.
+the edges of floating point, the kernels' parameters given per diagram position
+(bandwidths, ``combine``, ``diagram_weights``) and how the positions' kernels combine,
+and the blocks of samples of the vectorizers.
 
 Samples are validated and packed by :func:`~sklearn_meshph.diagrams.pack_samples`, the
 validator of the distances too; every transformer here works on its :class:`Packed`

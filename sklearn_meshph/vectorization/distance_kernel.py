@@ -58,8 +58,9 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
     ----------
     n_diagrams_ : int
         Diagram positions (the last axis of a 3-d input; 1 for a matrix).
-    n_fitted_ : int
-        Number of fitted samples: the columns ``transform`` expects and returns.
+    n_features_in_ : int
+        Number of fitted samples: the columns ``transform`` expects and returns (as
+        for scikit-learn's pairwise estimators).
     scales_ : ndarray of shape (n_diagrams,)
         The divisor of each position's distances (all 1 with ``normalization="none"``).
 
@@ -143,7 +144,7 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
             )
         position_bandwidths(self.bandwidth, n_diagrams)  # refused at fit, not later
         position_weights(self.diagram_weights, self.combine, n_diagrams)
-        self.n_diagrams_, self.n_fitted_ = n_diagrams, n
+        self.n_diagrams_, self.n_features_in_ = n_diagrams, n
         self.scales_ = np.ones(n_diagrams)
         if self.normalization == "median":
             self.scales_ = np.array([median_scale(distances[:, :, k]) for k in range(n_diagrams)])
@@ -161,13 +162,13 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
         -------
         ndarray of shape (n_samples, n_fitted)
         """
-        check_is_fitted(self, "n_fitted_")
+        check_is_fitted(self, "n_features_in_")
         self._check_params()
         distances = _distances(X)
-        expected = (self.n_fitted_, self.n_diagrams_)
+        expected = (self.n_features_in_, self.n_diagrams_)
         if distances.shape[1:] != expected:
             raise ValueError(
-                f"X has shape {np.shape(X)}: expected {self.n_fitted_} columns (the fitted "
+                f"X has shape {np.shape(X)}: expected {self.n_features_in_} columns (the fitted "
                 f"samples) and {self.n_diagrams_} diagram positions"
             )
         bandwidths = position_bandwidths(self.bandwidth, self.n_diagrams_)
@@ -194,7 +195,7 @@ class DistanceKernel(ClassNamePrefixFeaturesOutMixin, SampleTransformer):
 
     @property
     def _n_features_out(self) -> int:
-        return self.n_fitted_
+        return self.n_features_in_
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
@@ -209,6 +210,8 @@ def _distances(X) -> np.ndarray:
     if sp.issparse(X):
         raise TypeError("X must be a dense array of distances, got a sparse matrix")
     distances = np.asarray(X)
+    if distances.dtype.kind not in "iuf":
+        raise TypeError(f"X must hold real distances, got an array of dtype {distances.dtype}")
     if distances.dtype not in (np.float32, np.float64):
         distances = distances.astype(np.float64)
     if distances.ndim not in (2, 3) or 0 in distances.shape:
