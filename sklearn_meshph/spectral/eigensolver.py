@@ -48,7 +48,7 @@ COMPONENTS = (*COMPONENT_POLICIES, "all")
 DENSE_MAX_VERTICES = 200
 #: Up to this many nodes ``solver="auto"`` solves a graph's operator densely (the
 #: crossover measured by ``benchmarks/bench_graph_spectra.py``).
-DENSE_MAX_NODES = 200
+DENSE_MAX_NODES = 400
 #: The dense solver holds two ``n x n`` float64 matrices: larger operators are refused.
 DENSE_LIMIT = 12_000
 # Up to this size a dense solve (seconds) replaces an ARPACK run that did not converge.
@@ -184,7 +184,8 @@ def generalized_eigenpairs(
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
     values = np.maximum(values, 0.0)
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))
-    return values, fix_signs(vectors, mass)
+    # C order, as the cache stores them: a cached solve gives the same bits downstream.
+    return values, np.ascontiguousarray(fix_signs(vectors, mass))
 
 
 @validate_params(

@@ -84,7 +84,7 @@ def check_times(times) -> np.ndarray:
     if bad.any():
         raise ValueError(
             f"times must be finite and between {MIN_TIME:g} and {MAX_TIME:g}, got "
-            f"{array[bad][0]!r} (beyond that range every exp(-lambda t) is 0 or 1 for the "
+            f"{float(array[bad][0])!r} (beyond that range every exp(-lambda t) is 0 or 1 for the "
             "eigenvalues float64 holds: a signature without information)"
         )
     return array
