@@ -28,7 +28,7 @@ LAYERS = (
     ("diagrams",),
     ("vectorization",),
     ("combine",),
-    ("pipelines", "datasets", "plotting"),
+    ("pipelines", "datasets", "plotting", "retrieval"),
     ("_report", "_cli_args", "_cli_messages", "cli", "__main__"),
 )
 MAX_LINES = 600

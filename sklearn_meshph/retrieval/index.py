@@ -1,0 +1,496 @@
+"""Exact nearest neighbours in a fitted collection under a fitted distance pipeline,
+pruned by lower bounds, in bounded memory; and 1-NN classification on top."""
+
+from __future__ import annotations
+
+import copy
+from numbers import Integral
+
+import numpy as np
+from numpy.lib.format import open_memmap
+from sklearn.base import BaseEstimator, ClassifierMixin, clone
+from sklearn.pipeline import Pipeline
+from sklearn.utils import check_random_state
+from sklearn.utils.validation import check_is_fitted
+
+from .._base import as_sample_list
+from .._param_validation import HasMethods, Interval, Options, check_params
+from ..combine import CombinedDistance
+from ..pipelines import make_mesh_distance
+from .bounds import PartBound, is_indexable
+
+__all__ = ["ShapeNeighbors", "ShapeNeighborsClassifier"]
+
+# Relative margin under which a lower bound prunes nothing: the bounds and the exact
+# distances are rounded differently (float32 matrices too), the answer stays exact.
+SLACK = 1e-6
+
+
+def _split(distance):
+    """``(head, metric)``: the steps before the distance (or None) and the distance."""
+    head, metric = None, distance
+    if isinstance(distance, Pipeline):
+        metric = distance.steps[-1][1]
+        head = distance[:-1] if len(distance.steps) > 1 else None
+    if not (isinstance(metric, CombinedDistance) or is_indexable(metric)):
+        raise TypeError(
+            "distance must be a CombinedDistance, DiagramDistance or FeatureDistance, or a "
+            f"Pipeline ending in one (as make_mesh_distance() returns), got {type(metric).__name__}"
+        )
+    return head, metric
+
+
+def _fitted_parts(metric):
+    """``(name, factor, stateless steps or None, final step)`` of each part of a fitted
+    metric with a positive weight; ``factor`` is its weight over its scale (None: a
+    metric of one part, taken as it is)."""
+    if isinstance(metric, CombinedDistance):
+        named = [
+            (name, metric.weights_[name] / metric.scales_[name], part)
+            for name, part in metric.parts_
+            if metric.weights_[name] > 0
+        ]
+    else:
+        named = [("distance", None, metric)]
+    parts = []
+    for name, factor, part in named:
+        stateless, final = None, part
+        if isinstance(part, Pipeline):
+            final = part.steps[-1][1]
+            stateless = part[:-1] if len(part.steps) > 1 else None
+        if not is_indexable(final):
+            raise TypeError(
+                f"part {name!r} ends in a {type(final).__name__}; an index needs "
+                "DiagramDistance or FeatureDistance parts"
+            )
+        parts.append((name, factor, stateless, final))
+    return parts
+
+
+def _blocks(n, size):
+    return [(start, min(start + size, n)) for start in range(0, n, size)]
+
+
+def _in_block(function, start, stop):
+    """``function(start, stop)``, its errors naming the block of samples they happened in
+    (the stages name samples by their index in the block)."""
+    try:
+        return function(start, stop)
+    except ValueError as error:
+        raise ValueError(f"samples {start} to {stop - 1} of X: {error}") from error
+
+
+class _ShapeIndex(BaseEstimator):
+    """What :class:`ShapeNeighbors` and :class:`ShapeNeighborsClassifier` share: the
+    fitted rows, their bounds, the exact distances and the best-first search."""
+
+    _parameter_constraints: dict = {
+        "distance": [HasMethods(["fit", "transform"]), None],
+        "n_neighbors": [Interval(Integral, 1, None, closed="left")],
+        "scale_samples": [Interval(Integral, 2, None, closed="left"), None],
+        "block_size": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    def _fit_index(self, X):
+        check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
+        distance = make_mesh_distance() if self.distance is None else clone(self.distance)
+        head, metric = _split(distance)
+        samples = as_sample_list(X, "samples")
+        n = len(samples)
+        chosen = np.arange(n)
+        if self.scale_samples is not None and n > self.scale_samples:
+            rng = check_random_state(self.random_state)
+            chosen = np.sort(rng.choice(n, self.scale_samples, replace=False))
+        inputs = [samples[i] for i in chosen]
+        fields = inputs if head is None else head.fit_transform(inputs)
+        metric.fit(fields)
+        known = dict(zip(chosen.tolist(), fields, strict=True))
+        self.distance_, self.scale_indices_, self.n_samples_fit_ = distance, chosen, n
+        self._bounds = [
+            (name, factor, stateless, PartBound(final, 1.0 if factor is None else factor))
+            for name, factor, stateless, final in _fitted_parts(metric)
+        ]
+
+        def fields_of(start, stop):  # the chosen samples went through the head already
+            missing = [i for i in range(start, stop) if i not in known]
+            computed = [samples[i] for i in missing]
+            if missing and head is not None:
+                computed = head.transform(computed)
+            fresh = dict(zip(missing, computed, strict=True))
+            return [known[i] if i in known else fresh[i] for i in range(start, stop)]
+
+        self.rows_ = self._part_rows(fields_of, n)
+        self._vectors = [
+            bound.fit(self.rows_[name]).embed(self.rows_[name])
+            for name, _, _, bound in self._bounds
+        ]
+        return self
+
+    def _part_rows(self, fields_of, n):
+        """Each part's validated rows of ``n`` samples, by part name, block by block
+        (``fields_of(start, stop)``: the head's output for the samples of a block)."""
+        rows = {name: [] for name, *_ in self._bounds}
+
+        def through(start, stop):
+            block = fields_of(start, stop)
+            for name, _, stateless, bound in self._bounds:
+                out = block if stateless is None else stateless.transform(block)
+                rows[name].extend(bound.validate(out))
+
+        for start, stop in _blocks(n, self.block_size):
+            _in_block(through, start, stop)
+        return {
+            name: rows[name] if bound.diagrams else np.asarray(rows[name], float).reshape(n, -1)
+            for name, _, _, bound in self._bounds
+        }
+
+    def _represent(self, X):
+        """Each part's validated rows of the samples ``X``, through the fitted stages."""
+        head, _ = _split(self.distance_)
+        samples = as_sample_list(X, "samples")
+
+        def fields_of(start, stop):
+            return samples[start:stop] if head is None else head.transform(samples[start:stop])
+
+        return self._part_rows(fields_of, len(samples))
+
+    def _exact(self, query, cols):
+        """The exact ``(n_queries, len(cols))`` distances of query rows to fitted samples
+        ``cols``: each part's own fitted last step on the candidates (a shallow copy
+        holding their rows), combined as the fitted metric combines the parts."""
+        total = None
+        for name, factor, _, bound in self._bounds:
+            view = copy.copy(bound.final)
+            fitted = self.rows_[name]
+            if bound.diagrams:
+                view.diagrams_ = [fitted[j] for j in cols]
+            else:
+                view.features_ = fitted[cols]
+            matrix = np.asarray(view.transform(query[name]), dtype=float)
+            term = matrix if factor is None else factor * matrix
+            total = term if total is None else total + term
+        return total
+
+    def _lower(self, query):
+        """Lower bounds of the combined distance of query rows to every fitted sample."""
+        total = None
+        for (name, _, _, bound), fitted in zip(self._bounds, self._vectors, strict=True):
+            term = bound.lower(bound.embed(query[name]), fitted)
+            total = term if total is None else total + term
+        return total
+
+    def _select(self, query, lower, k, exclude):
+        """The ``k`` nearest fitted samples of one query (ties: lowest index) and the
+        number of exact distances computed, best first by lower bound."""
+        order = np.argsort(lower, kind="stable")
+        if exclude is not None:
+            order = order[order != exclude]
+        n_finite = int(np.sum(np.isfinite(lower[order])))
+        safe = lower[order[:n_finite]] * (1.0 - SLACK)
+        distances, indices = [], []
+        done, batch = 0, max(8, 2 * k)
+        while done < n_finite:
+            cols = order[done : done + batch]
+            distances.append(self._exact(query, cols)[0])
+            indices.append(cols)
+            done, batch = done + len(cols), 2 * batch
+            if done >= k and done < n_finite:
+                kth = np.partition(np.concatenate(distances), k - 1)[k - 1]
+                if safe[done] > kth:
+                    break
+        if done < k:  # the samples whose essential points differ in number: at inf
+            extra = order[n_finite : n_finite + k - done]
+            distances.append(np.full(len(extra), np.inf))
+            indices.append(extra)
+        distances, indices = np.concatenate(distances), np.concatenate(indices)
+        best = np.lexsort((indices, distances))[:k]
+        return distances[best], indices[best], done
+
+    def _query(self, X, n_neighbors):
+        """``(distances, indices, n_exact)`` of the ``n_neighbors`` nearest fitted samples
+        of each sample of ``X`` (``None``: each fitted sample, itself excluded)."""
+        check_is_fitted(self, "rows_")
+        k = self.n_neighbors if n_neighbors is None else n_neighbors
+        available = self.n_samples_fit_ - (X is None)
+        if isinstance(k, bool) or not isinstance(k, Integral) or not 1 <= k <= available:
+            raise ValueError(
+                f"n_neighbors must be an int in [1, {available}] (the fitted samples"
+                f"{', less the query' if X is None else ''}), got {k!r}"
+            )
+        query = self.rows_ if X is None else self._represent(X)
+        n_queries = len(next(iter(query.values())))
+        distances = np.empty((n_queries, k))
+        indices = np.empty((n_queries, k), dtype=np.int64)
+        n_exact = np.empty(n_queries, dtype=np.int64)
+        for start, stop in _blocks(n_queries, self.block_size):
+            block = {name: rows[start:stop] for name, rows in query.items()}
+            lower = self._lower(block)
+            for i in range(stop - start):
+                one = {name: rows[i : i + 1] for name, rows in block.items()}
+                exclude = start + i if X is None else None
+                found = self._select(one, lower[i], k, exclude)
+                distances[start + i], indices[start + i], n_exact[start + i] = found
+        return distances, indices, n_exact
+
+    def kneighbors(self, X=None, n_neighbors=None, return_distance=True):
+        """The nearest fitted samples of each sample, exact under the fitted distance.
+
+        Parameters
+        ----------
+        X : sequence of samples or None, default=None
+            What ``distance`` takes (meshes for :func:`make_mesh_distance`). ``None``:
+            the fitted samples, each one's own index excluded from its neighbours.
+        n_neighbors : int or None, default=None
+            ``None``: the ``n_neighbors`` of the estimator.
+        return_distance : bool, default=True
+
+        Returns
+        -------
+        distances : ndarray of shape (n_queries, n_neighbors)
+            Only when ``return_distance``; ``inf`` for samples whose essential points
+            differ in number from the query's.
+        indices : ndarray of shape (n_queries, n_neighbors)
+            Into the fitted samples, nearest first; equal distances by lowest index.
+        """
+        distances, indices, _ = self._query(X, n_neighbors)
+        return (distances, indices) if return_distance else indices
+
+    def exact_fraction(self, X=None, n_neighbors=None):
+        """The fraction of the fitted samples whose exact distance a query computes (the
+        rest are pruned by their lower bounds): what :meth:`kneighbors` costs.
+
+        Parameters
+        ----------
+        X, n_neighbors : as for :meth:`kneighbors`
+
+        Returns
+        -------
+        ndarray of shape (n_queries,)
+        """
+        return self._query(X, n_neighbors)[2] / self.n_samples_fit_
+
+    def distance_matrix(self, X=None, *, path=None, dtype="float32"):
+        """Every exact distance, to a file row block by row block when ``path`` is given.
+
+        For t-SNE and leave-one-out on collections whose matrix does not fit in memory:
+        with ``path``, the matrix is a :func:`numpy.lib.format.open_memmap` ``.npy``
+        file, and the memory used is one block of ``block_size`` rows of float64 per
+        part on top of the fitted rows (docs/scale.md).
+
+        Parameters
+        ----------
+        X : sequence of samples or None, default=None
+            ``None``: the symmetric matrix of the fitted samples, each unordered pair
+            computed once (as ``distance.fit_transform`` of the fitted samples returns
+            it, when the scales were learned on all of them).
+        path : str, path or None, default=None
+            Where to write the matrix (an ``.npy`` file, overwritten); ``None``: in memory.
+        dtype : {"float32", "float64"}, default="float32"
+
+        Returns
+        -------
+        ndarray or numpy.memmap of shape (n_queries, n_samples_fit_)
+        """
+        check_is_fitted(self, "rows_")
+        if not Options(("float32", "float64"))(dtype):
+            raise ValueError(f"dtype must be 'float32' or 'float64', got {dtype!r}")
+        query = self.rows_ if X is None else self._represent(X)
+        n_rows, n = len(next(iter(query.values()))), self.n_samples_fit_
+        shape = (n_rows, n)
+        if path is None:
+            out = np.empty(shape, dtype=dtype)
+        else:
+            out = open_memmap(path, mode="w+", dtype=dtype, shape=shape)
+        for start, stop in _blocks(n_rows, self.block_size):
+            block = {name: rows[start:stop] for name, rows in query.items()}
+            first = start if X is None else 0  # symmetric: the columns from the block on
+            values = self._exact(block, np.arange(first, n))
+            out[start:stop, first:] = values
+            if X is None:
+                out[first:, start:stop] = values.T
+        if path is not None:
+            out.flush()
+        return out
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.two_d_array = False
+        return tags
+
+
+class ShapeNeighbors(_ShapeIndex):
+    """Exact nearest neighbours of shapes in a fitted collection, pruned by lower bounds.
+
+    Like :class:`sklearn.neighbors.NearestNeighbors`, for the precomputed-metric
+    pipelines of this package: ``fit`` learns the pipeline's scales (the medians of
+    :class:`CombinedDistance` and :class:`DiagramDistance`) and stores each part's
+    diagrams or features of the fitted samples, never a matrix of them; ``kneighbors``
+    returns the same neighbours as sorting the rows of the fitted pipeline's
+    ``transform`` (equal distances by lowest index), computing exact distances only for
+    the candidates that cheap lower bounds cannot rule out (best first, until the
+    ``k``-th exact distance is at most the next lower bound).
+
+    Parameters
+    ----------
+    distance : Pipeline, CombinedDistance, DiagramDistance, FeatureDistance or None, \
+            default=None
+        The metric: a pipeline ending in a distance stage, as :func:`make_mesh_distance`
+        returns (``None``: ``make_mesh_distance()``, the default), whose steps before
+        it and before each part's last step transform samples one by one. Each part
+        must end in a :class:`DiagramDistance` or a :class:`FeatureDistance`.
+    n_neighbors : int, default=5
+        Neighbours returned by default.
+    scale_samples : int or None, default=1000
+        The scales are learned as ``distance.fit`` learns them, on all fitted samples up
+        to this many, above it on this many drawn at random (``random_state``): fitting
+        the medians costs the distances of all their pairs. ``None``: always all.
+    block_size : int, default=64
+        Samples transformed together, and queries whose lower bounds are held at once
+        (a ``block_size`` by ``n_samples_fit_`` float64 array per part).
+    random_state : int, RandomState or None, default=0
+        Draws the samples of the scales.
+
+    Attributes
+    ----------
+    distance_ : Pipeline or estimator
+        The fitted clone of ``distance`` (on the samples ``scale_indices_``).
+    scale_indices_ : ndarray of int
+        The fitted samples the scales were learned on.
+    rows_ : dict of str to list or ndarray
+        Each part's fitted rows (tuples of diagrams, or features), by part name
+        (``"distance"`` for a metric of one part).
+    n_samples_fit_ : int
+
+    See Also
+    --------
+    ShapeNeighborsClassifier : Nearest-neighbour classification on the same index.
+    retrieval_scores : The retrieval measures of SHREC from a distance matrix.
+
+    Notes
+    -----
+    A part of weight 0 is left out. Lower bounds are described in
+    :mod:`sklearn_meshph.retrieval.bounds`; the fraction of exact distances a query
+    computes is :meth:`exact_fraction`; measured costs are in ``docs/scale.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import DiagramDistance, ShapeNeighbors
+    >>> diagrams = [np.array([[0.0, t]]) for t in (1.0, 2.0, 4.0)]
+    >>> index = ShapeNeighbors(DiagramDistance("wasserstein", order=1.0), n_neighbors=1)
+    >>> index.fit(diagrams).kneighbors([np.array([[0.0, 1.5]])])
+    (array([[0.5]]), array([[0]]))
+    """
+
+    def __init__(
+        self, distance=None, n_neighbors=5, scale_samples=1000, block_size=64, random_state=0
+    ):
+        self.distance = distance
+        self.n_neighbors = n_neighbors
+        self.scale_samples = scale_samples
+        self.block_size = block_size
+        self.random_state = random_state
+
+    def fit(self, X, y=None):
+        """Learn the scales of ``distance`` and store the rows of every part.
+
+        Parameters
+        ----------
+        X : sequence of samples
+            What ``distance`` takes (meshes for :func:`make_mesh_distance`).
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        return self._fit_index(X)
+
+
+class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
+    """Nearest-neighbour classification of shapes, exact and pruned
+    (:class:`ShapeNeighbors`' index), like :class:`sklearn.neighbors.KNeighborsClassifier`.
+
+    Parameters
+    ----------
+    distance, scale_samples, block_size, random_state
+        As for :class:`ShapeNeighbors`.
+    n_neighbors : int, default=1
+        Neighbours that vote (uniform weights; a tied vote goes to the first class of
+        ``classes_``).
+
+    Attributes
+    ----------
+    classes_ : ndarray
+    distance_, scale_indices_, rows_, n_samples_fit_
+        As for :class:`ShapeNeighbors`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import DiagramDistance, ShapeNeighborsClassifier
+    >>> diagrams = [np.array([[0.0, t]]) for t in (1.0, 1.2, 4.0, 4.5)]
+    >>> model = ShapeNeighborsClassifier(DiagramDistance()).fit(diagrams, ["a", "a", "b", "b"])
+    >>> model.predict([np.array([[0.0, 4.2]])])
+    array(['b'], dtype='<U1')
+    """
+
+    def __init__(
+        self, distance=None, n_neighbors=1, scale_samples=1000, block_size=64, random_state=0
+    ):
+        self.distance = distance
+        self.n_neighbors = n_neighbors
+        self.scale_samples = scale_samples
+        self.block_size = block_size
+        self.random_state = random_state
+
+    def fit(self, X, y):
+        """Index ``X`` and keep its labels.
+
+        Parameters
+        ----------
+        X : sequence of samples
+        y : array-like of shape (n_samples,)
+
+        Returns
+        -------
+        self
+        """
+        samples = as_sample_list(X, "samples")  # read once: X may be a generator
+        y = np.asarray(y)
+        if y.ndim != 1 or len(y) != len(samples):
+            raise ValueError(
+                f"y must hold one label per sample of X ({len(samples)}), got shape {y.shape}"
+            )
+        self.classes_, self._codes = np.unique(y, return_inverse=True)
+        return self._fit_index(samples)
+
+    def predict_proba(self, X):
+        """The share of each class among the neighbours of each sample.
+
+        Parameters
+        ----------
+        X : sequence of samples
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_classes)
+        """
+        indices = self.kneighbors(X, return_distance=False)
+        votes = self._codes[indices]
+        counts = np.stack([np.sum(votes == c, axis=1) for c in range(len(self.classes_))], 1)
+        return counts / indices.shape[1]
+
+    def predict(self, X):
+        """The class of most neighbours of each sample.
+
+        Parameters
+        ----------
+        X : sequence of samples
+
+        Returns
+        -------
+        ndarray of shape (n_samples,)
+        """
+        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
