@@ -4,7 +4,12 @@ LowerStarPersistence on graph samples."""
 import numpy as np
 import pytest
 
-from sklearn_meshph import extended_persistence
+from sklearn_meshph import (
+    LowerStarPersistence,
+    ScalarField,
+    extended_persistence,
+    lower_star_persistence,
+)
 from sklearn_meshph.graph import Graph
 
 gudhi = pytest.importorskip("gudhi")
@@ -206,3 +211,121 @@ def test_bad_input_is_named():
     vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
     with pytest.raises(TypeError, match="extended_persistence takes a graph"):
         extended_persistence((vertices, np.array([[0, 1, 2]])), np.zeros(3))
+
+
+# LowerStarPersistence and lower_star_persistence on graphs -------------------------------
+
+
+def graph_field(n_nodes, edges, values):
+    """A ScalarField on a graph's nodes (no coordinates), as the eigen stage makes it."""
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    return ScalarField(np.empty((n_nodes, 0)), np.empty((0, 3), dtype=int), values, edges=edges)
+
+
+def library_orientation(diagrams):
+    """extended_persistence's dict as LowerStarPersistence(filtration='extended') orders
+    and orients it: lower value first."""
+    return [
+        diagrams["ord0"],
+        diagrams["rel1"][:, ::-1],
+        diagrams["ext0"],
+        diagrams["ext1"][:, ::-1],
+    ]
+
+
+def test_extended_filtration_of_a_graph_field_is_extended_persistence():
+    rng = np.random.default_rng(11)
+    n, edges = 12, _pairs(12, 0.4, rng)
+    graph = as_graph(n, edges)
+    values = np.column_stack([rng.normal(size=n), rng.integers(0, 3, n).astype(float)])
+    out = LowerStarPersistence(filtration="extended").fit_transform(
+        [graph_field(n, graph.edges, values), (graph, values)]
+    )
+    for sample in out:
+        assert len(sample) == 8  # four diagrams per function, function-major
+        for k in range(2):
+            expected = library_orientation(extended_persistence(graph, values[:, k]))
+            for got, want in zip(sample[4 * k : 4 * k + 4], expected, strict=True):
+                np.testing.assert_array_equal(sorted_rows(got), sorted_rows(want))
+    ext1 = out[0][3]
+    assert len(ext1) and (ext1[:, 0] < ext1[:, 1]).all()
+
+
+def test_graph_cycles_give_ext1_but_a_cloud_graph_does_not():
+    square = np.array([[0, 1], [1, 2], [2, 3], [0, 3]])
+    values = np.array([0.0, 3.0, 1.0, 2.0])
+    on_graph = LowerStarPersistence(filtration="extended").fit_transform(
+        [graph_field(4, square, values)]
+    )[0]
+    np.testing.assert_array_equal(on_graph[3], [[0.0, 3.0]])
+    np.testing.assert_array_equal(on_graph[1], [[1.0, 2.0]])  # (saddle, max)
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    cloud = ScalarField(points, np.empty((0, 3), dtype=int), values, edges=square)
+    on_cloud = LowerStarPersistence(filtration="extended").fit_transform([cloud])[0]
+    assert len(on_cloud[3]) == 0
+    for got, want in zip(on_cloud[:3], on_graph[:3], strict=True):
+        np.testing.assert_array_equal(sorted_rows(got), sorted_rows(want))
+
+
+def test_negated_function_swaps_and_reflects_on_graphs():
+    rng = np.random.default_rng(3)
+    n, edges = 12, _pairs(12, 0.4, rng)
+    values = rng.normal(size=n)
+    estimator = LowerStarPersistence(filtration="extended")
+    up, down = estimator.fit_transform(
+        [graph_field(n, edges, values), graph_field(n, edges, -values)]
+    )
+
+    def reflect(d):
+        return np.column_stack([-d[:, 1], -d[:, 0]])
+
+    for got, source in zip(down, (up[1], up[0], up[2], up[3]), strict=True):
+        np.testing.assert_allclose(sorted_rows(got), sorted_rows(reflect(source)))
+
+
+def test_sublevel_filtrations_and_parts_on_graphs():
+    rng = np.random.default_rng(8)
+    n, edges = random_graph("sparse", rng)
+    graph = as_graph(n, edges)
+    values = rng.normal(size=n)
+    field = graph_field(n, graph.edges, values)
+    h0 = LowerStarPersistence(filtration="sublevel").fit_transform([field])[0]
+    np.testing.assert_array_equal(h0, lower_star_persistence(graph, values))
+    diagrams = extended_persistence(graph, values)
+    finite = h0[np.isfinite(h0[:, 1])]
+    np.testing.assert_array_equal(sorted_rows(finite), sorted_rows(diagrams["ord0"]))
+    sup = LowerStarPersistence(filtration="superlevel").fit_transform([field])[0]
+    np.testing.assert_allclose(
+        sorted_rows(-sup[np.isfinite(sup[:, 1])][:, ::-1]), sorted_rows(diagrams["rel1"][:, ::-1])
+    )
+    only = LowerStarPersistence(filtration="extended", parts=("ext1",)).fit_transform([field])[0]
+    np.testing.assert_array_equal(sorted_rows(only), sorted_rows(diagrams["ext1"][:, ::-1]))
+    long = LowerStarPersistence(filtration="extended", min_persistence=0.5).fit_transform([field])
+    for diagram in long[0]:
+        assert (diagram[:, 1] - diagram[:, 0] > 0.5).all()
+
+
+def test_repeated_edges_and_loops_of_a_field_are_one_simplex():
+    square = [[0, 1], [1, 2], [2, 3], [0, 3]]
+    messy = [[1, 0], [0, 1], [1, 2], [2, 2], [3, 2], [0, 3], [2, 3]]
+    values = np.array([0.0, 3.0, 1.0, 2.0])
+    estimator = LowerStarPersistence(filtration="extended")
+    clean, noisy = estimator.fit_transform(
+        [graph_field(4, square, values), graph_field(4, messy, values)]
+    )
+    for a, b in zip(clean, noisy, strict=True):
+        np.testing.assert_array_equal(sorted_rows(a), sorted_rows(b))
+    assert len(noisy[3]) == 1
+
+
+def test_graph_without_edges_and_bad_graph_values_are_named():
+    lonely = LowerStarPersistence(filtration="extended").fit_transform(
+        [ScalarField(np.empty((3, 0)), np.empty((0, 3), dtype=int), [0.0, 1.0, 2.0])]
+    )[0]
+    assert all(len(d) == 0 for d in lonely)
+    with pytest.raises(ValueError, match=r"sample 1: .*shape \(4,\)"):
+        LowerStarPersistence().fit_transform(
+            [(as_graph(4, [[0, 1]]), np.zeros(4)), (as_graph(4, [[0, 1]]), np.zeros(3))]
+        )
+    with pytest.raises(ValueError, match=r"shape \(4,\)"):
+        lower_star_persistence(as_graph(4, [[0, 1]]), np.zeros(5))

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..mesh.graph import closed_surface_edges, connected_components, find_root
 
-__all__ = ["closed_surface", "essential_h1_pairs"]
+__all__ = ["closed_surface", "essential_h1_pairs", "rooted_forest"]
 
 
 def closed_surface(faces: np.ndarray, adjacency):
@@ -50,7 +50,7 @@ def _spanning_forest(n_nodes, ends, edge_order):
 
 
 @numba.njit(cache=True)
-def _rooted_forest(n_nodes, ends, used):
+def rooted_forest(n_nodes, ends, used):
     """Parent node, parent edge and depth of every node of the forest of ``used`` edges."""
     degree = np.zeros(n_nodes + 1, dtype=np.int64)
     for e in range(len(ends)):
@@ -162,11 +162,11 @@ def essential_h1_pairs(values: np.ndarray, surface) -> np.ndarray:
     # labels[e] holds the dual loops (one per class born upwards) that cross edge e
     labels = np.zeros((len(edges), words), dtype=np.uint64)
     labels[up, np.arange(len(up)) // 64] = bits
-    parent, parent_edge, depth = _rooted_forest(int(edge_faces.max()) + 1, edge_faces, up_cotree)
+    parent, parent_edge, depth = rooted_forest(int(edge_faces.max()) + 1, edge_faces, up_cotree)
     marks = np.zeros((len(up), words), dtype=np.uint64)
     marks[np.arange(len(up)), np.arange(len(up)) // 64] = bits
     _mark_dual_loops(edge_faces[up], parent, parent_edge, depth, marks, labels)
-    parent, parent_edge, depth = _rooted_forest(n_vertices, edges, down_tree)
+    parent, parent_edge, depth = rooted_forest(n_vertices, edges, down_tree)
     coordinates = labels[down].copy()
     _xor_along_paths(edges[down], parent, parent_edge, depth, labels, coordinates)
     pivots: dict[int, int] = {}

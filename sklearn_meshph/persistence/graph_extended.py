@@ -25,6 +25,7 @@ pivot pairs each descending edge with the ascending edge that creates its class.
 from __future__ import annotations
 
 from numbers import Real
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -34,11 +35,55 @@ from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import find_root
 from ..mesh.validation import check_values, where
+from .extended import rooted_forest
+from .lower_star import elder_merge
 
-__all__ = ["GRAPH_DIAGRAMS", "extended_persistence", "graph_diagrams"]
+__all__ = [
+    "GRAPH_DIAGRAMS",
+    "GraphCycles",
+    "extended_persistence",
+    "graph_cycles",
+    "graph_diagrams",
+]
 
 #: The keys of :func:`extended_persistence`, in the order of :func:`graph_diagrams`.
 GRAPH_DIAGRAMS = ("ord0", "rel1", "ext0", "ext1")
+
+
+class GraphCycles(NamedTuple):
+    """A graph sample as the extended filtration reads it: its node count and its
+    edges, each once as ``i < j`` (no self-loops), from :func:`graph_cycles`."""
+
+    n_nodes: int
+    edges: np.ndarray
+
+
+@numba.njit(cache=True)
+def _simple(n_nodes, edges):
+    """Whether the rows of ``edges`` are in range (else -1), and whether each is
+    ``i < j`` with the rows strictly increasing (1; 0 if not)."""
+    simple = 1
+    for e in range(len(edges)):
+        a, b = edges[e, 0], edges[e, 1]
+        if a < 0 or b < 0 or a >= n_nodes or b >= n_nodes:
+            return -1
+        if a >= b or (e and (edges[e - 1, 0], edges[e - 1, 1]) >= (a, b)):
+            simple = 0
+    return simple
+
+
+def graph_cycles(n_nodes: int, edges: np.ndarray) -> GraphCycles:
+    """``edges`` (int64 ``(m, 2)``) of a graph on ``n_nodes`` nodes as a
+    :class:`GraphCycles`: self-loops dropped (a loop is no cycle of the lower-star
+    filtration), each edge once (a repeated edge is the same simplex)."""
+    edges = np.ascontiguousarray(edges, dtype=np.int64).reshape(-1, 2)
+    status = _simple(n_nodes, edges)
+    if status < 0:
+        raise ValueError(f"edges must be node indices in range({n_nodes})")
+    if status == 0:
+        edges = np.sort(edges[edges[:, 0] != edges[:, 1]], axis=1)
+        edges = np.unique(edges, axis=0) if len(edges) else edges
+    return GraphCycles(int(n_nodes), edges)
 
 
 @numba.njit(cache=True)
@@ -76,13 +121,10 @@ def _sweep(order, indptr, incident, edges):
     positive = np.empty(len(edges), dtype=np.int64)
     births = np.empty(n, dtype=np.int64)
     deaths = np.empty(n, dtype=np.int64)
-    n_pairs = 0
-    n_positive = 0
-    for r in range(n):
-        v = order[r]
+    n_pairs = n_positive = 0
+    for r, v in enumerate(order):
         root_v = v
-        for k in range(indptr[v], indptr[v + 1]):
-            e = incident[k]
+        for e in incident[indptr[v] : indptr[v + 1]]:
             u = edges[e, 0] + edges[e, 1] - v
             if position[u] > r:
                 continue
@@ -92,16 +134,9 @@ def _sweep(order, indptr, incident, edges):
                 n_positive += 1
                 continue
             in_forest[e] = True
-            if position[root_u] < position[root_v]:
-                older, younger = root_u, root_v
-            else:
-                older, younger = root_v, root_u
-            if younger != v:
-                births[n_pairs] = younger
-                deaths[n_pairs] = v
-                n_pairs += 1
-            parent[younger] = older
-            root_v = older
+            root_v, n_pairs = elder_merge(
+                parent, position, root_u, root_v, v, births, deaths, n_pairs
+            )
     return births[:n_pairs], deaths[:n_pairs], parent, in_forest, positive[:n_positive]
 
 
@@ -117,46 +152,30 @@ def _top_bit(word):
 
 
 @numba.njit(cache=True)
-def _root_path_labels(indptr, incident, edges, in_forest, bit_of, words):
+def _root_path_labels(n_nodes, edges, in_forest, bit_of, words):
     """For every node, the XOR of the bits (``bit_of[e] >= 0``) of the forest edges on
-    its path to the root of its tree (a breadth-first search from each tree's first
-    node)."""
-    n = len(indptr) - 1
-    labels = np.zeros((n, words), dtype=np.uint64)
-    seen = np.zeros(n, dtype=np.bool_)
-    queue = np.empty(n, dtype=np.int64)
-    for root in range(n):
-        if seen[root]:
+    its path to the root of its tree."""
+    parent, parent_edge, depth = rooted_forest(n_nodes, edges, in_forest)
+    labels = np.zeros((n_nodes, words), dtype=np.uint64)
+    for b in np.argsort(depth, kind="mergesort"):
+        e = parent_edge[b]
+        if e < 0:
             continue
-        seen[root] = True
-        queue[0] = root
-        head, tail = 0, 1
-        while head < tail:
-            a = queue[head]
-            head += 1
-            for k in range(indptr[a], indptr[a + 1]):
-                e = incident[k]
-                b = edges[e, 0] + edges[e, 1] - a
-                if not in_forest[e] or seen[b]:
-                    continue
-                seen[b] = True
-                labels[b] = labels[a]
-                if bit_of[e] >= 0:
-                    labels[b, bit_of[e] // 64] ^= np.uint64(1) << np.uint64(bit_of[e] % 64)
-                queue[tail] = b
-                tail += 1
+        labels[b] = labels[parent[b]]
+        if bit_of[e] >= 0:
+            labels[b, bit_of[e] // 64] ^= np.uint64(1) << np.uint64(bit_of[e] % 64)
     return labels
 
 
 @numba.njit(cache=True)
-def _cycle_pairs(values, edges, indptr, incident, up_positive, down_positive, down_forest):
+def _cycle_pairs(values, edges, up_positive, down_positive, down_forest):
     """Ext1 as (ascending edge, descending edge) index pairs (see the module's notes)."""
     k = len(up_positive)
     words = (k + 63) // 64
     bit_of = np.full(len(edges), -1, dtype=np.int64)
     for i in range(k):
         bit_of[up_positive[i]] = i
-    labels = _root_path_labels(indptr, incident, edges, down_forest, bit_of, words)
+    labels = _root_path_labels(len(values), edges, down_forest, bit_of, words)
     columns = np.empty((len(down_positive), words), dtype=np.uint64)
     for j in range(len(down_positive)):
         e = down_positive[j]
@@ -215,7 +234,7 @@ def _graph_diagrams(n_nodes, edges, values, min_persistence):
         top[root] = max(top[root], values[v])
     roots = order[up_parent[order] == order]
     ext0 = _kept(values[roots], top[roots], min_persistence)
-    pairs = _cycle_pairs(values, edges, indptr, incident, up_positive, down_positive, down_forest)
+    pairs = _cycle_pairs(values, edges, up_positive, down_positive, down_forest)
     births = np.empty(len(pairs))
     deaths = np.empty(len(pairs))
     for i in range(len(pairs)):
@@ -226,9 +245,9 @@ def _graph_diagrams(n_nodes, edges, values, min_persistence):
     return ord0, rel1, ext0, ext1
 
 
-def graph_diagrams(graph: Graph, values: np.ndarray, min_persistence: float = 0.0):
-    """``(ord0, rel1, ext0, ext1)`` of one function on a validated graph, gudhi's
-    orientation (see :func:`extended_persistence`); ``values`` finite float64 ``(n,)``,
+def graph_diagrams(graph: GraphCycles, values: np.ndarray, min_persistence: float = 0.0):
+    """``(ord0, rel1, ext0, ext1)`` of one function on a graph, gudhi's orientation (see
+    :func:`extended_persistence`); ``values`` finite float64 ``(n_nodes,)``,
     contiguous."""
     return _graph_diagrams(graph.n_nodes, graph.edges, values, float(min_persistence))
 
@@ -310,5 +329,6 @@ def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np
     values = check_values(values, graph.n_nodes, where(None))
     if values.ndim != 1:
         raise ValueError(f"values must have shape ({graph.n_nodes},), got {values.shape}")
-    diagrams = graph_diagrams(graph, np.ascontiguousarray(values), min_persistence)
+    cycles = graph_cycles(graph.n_nodes, graph.edges)
+    diagrams = graph_diagrams(cycles, np.ascontiguousarray(values), min_persistence)
     return dict(zip(GRAPH_DIAGRAMS, diagrams, strict=True))

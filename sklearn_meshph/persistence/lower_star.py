@@ -6,12 +6,31 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import find_root, mesh_edges
 from ..mesh.validation import check_values
 from ..pointcloud.graph import edge_adjacency, knn_graph
 
-__all__ = ["lower_star_persistence", "sublevel_h0"]
+__all__ = ["elder_merge", "lower_star_persistence", "sublevel_h0"]
+
+
+@numba.njit(cache=True)
+def elder_merge(parent, rank, root_u, root_v, v, births, deaths, n_pairs):
+    """Join the components of roots ``root_u != root_v`` at vertex ``v`` by the elder
+    rule: the root of larger ``rank`` dies at ``v``, recorded in ``births`` and
+    ``deaths`` at ``n_pairs`` unless it is ``v`` itself (a pair of length zero).
+    Returns the surviving root and the new pair count."""
+    if rank[root_u] < rank[root_v]:
+        older, younger = root_u, root_v
+    else:
+        older, younger = root_v, root_u
+    if younger != v:
+        births[n_pairs] = younger
+        deaths[n_pairs] = v
+        n_pairs += 1
+    parent[younger] = older
+    return older, n_pairs
 
 
 @numba.njit(cache=True)
@@ -42,18 +61,10 @@ def _union_find_h0(values, order, indptr, indices):
             if rank[u] > r:
                 continue
             root_u = find_root(parent, u)
-            if root_u == root_v:
-                continue
-            if rank[root_u] < rank[root_v]:
-                older, younger = root_u, root_v
-            else:
-                older, younger = root_v, root_u
-            if younger != v:
-                births[n_pairs] = younger
-                deaths[n_pairs] = v
-                n_pairs += 1
-            parent[younger] = older
-            root_v = older
+            if root_u != root_v:
+                root_v, n_pairs = elder_merge(
+                    parent, rank, root_u, root_v, v, births, deaths, n_pairs
+                )
     roots = np.empty(n, dtype=order.dtype)
     n_roots = 0
     for r in range(n):
@@ -82,14 +93,16 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike or point cloud
+    mesh : trimesh.Trimesh, (vertices, faces) pair, str, os.PathLike, point cloud or graph
         The simplicial complex: vertices, edges and triangles of the mesh as given (no
         cleaning: an unreferenced vertex is a component of its own). A point cloud (an
         ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points) is filtered on
         its symmetric k-nearest-neighbour graph
-        (:func:`sklearn_meshph.pointcloud.graph.knn_graph`).
+        (:func:`sklearn_meshph.pointcloud.graph.knn_graph`), a graph (a
+        :class:`~sklearn_meshph.graph.Graph`, an ``(n_nodes, edges)`` pair, a sparse
+        adjacency or a networkx graph) on its nodes and edges.
     values : array-like of shape (n_vertices,)
-        The function, finite.
+        The function, finite (on a graph, one value per node).
 
     Returns
     -------
@@ -102,6 +115,7 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
     See Also
     --------
     LowerStarPersistence : Diagrams of many samples, superlevel and extended persistence.
+    extended_persistence : The four extended diagrams of a function on a graph.
 
     Notes
     -----
@@ -126,15 +140,18 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
            [ 0., inf]])
     """
     vertices, faces = check_input(mesh)
-    values = check_values(values, len(vertices))
+    n_vertices = vertices.n_nodes if isinstance(vertices, Graph) else len(vertices)
+    values = check_values(values, n_vertices)
     if values.ndim != 1:
         raise ValueError(
-            f"values must have shape ({len(vertices)},), got {values.shape}: for several "
+            f"values must have shape ({n_vertices},), got {values.shape}: for several "
             "functions on one mesh use LowerStarPersistence, which shares the adjacency"
         )
-    if faces is None:
-        adjacency = edge_adjacency(knn_graph(vertices), len(vertices))
+    if isinstance(vertices, Graph):
+        adjacency = edge_adjacency(vertices.edges, n_vertices)
+    elif faces is None:
+        adjacency = edge_adjacency(knn_graph(vertices), n_vertices)
     else:
-        adjacency = mesh_edges(faces, len(vertices))
+        adjacency = mesh_edges(faces, n_vertices)
     pairs, essential, _ = sublevel_h0(adjacency, values)
     return np.vstack([pairs, np.column_stack([essential, np.full(len(essential), np.inf)])])

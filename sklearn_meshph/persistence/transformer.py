@@ -1,5 +1,5 @@
-"""LowerStarPersistence: vertex functions on meshes and point clouds to persistence
-diagrams."""
+"""LowerStarPersistence: vertex functions on meshes, point clouds and graphs to
+persistence diagrams."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import numpy as np
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
 from .._progress import map_samples
+from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
@@ -18,23 +19,28 @@ from ..mesh.validation import check_values, where
 from ..pointcloud.graph import edge_adjacency, knn_graph
 from .extended import closed_surface
 from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
+from .graph_extended import graph_cycles
 
 __all__ = ["LowerStarPersistence"]
 
 
 def _sample_arrays(sample, index):
-    """Faces, extra edges, vertex count and values of a sample, validated once: a
-    ScalarField was validated when it was made, a ``(mesh, values)`` pair is validated
-    here (a point cloud gets its kNN graph as edges)."""
+    """Faces, extra edges, vertex count and values of a sample, validated once, and
+    whether it is a graph: a ScalarField was validated when it was made, a ``(mesh,
+    values)`` pair is validated here (a point cloud gets its kNN graph as edges, a graph
+    its own edges)."""
     if isinstance(sample, ScalarField):
-        return sample.faces, sample.edges, sample.n_vertices, sample.values
+        return sample.faces, sample.edges, sample.n_vertices, sample.values, sample.is_graph
     if isinstance(sample, tuple | list) and len(sample) == 2:
         mesh, values = sample
-        vertices, faces = check_input(mesh, index=index)
-        values = check_values(values, len(vertices), where(index))
+        first, faces = check_input(mesh, index=index)
+        if isinstance(first, Graph):
+            values = check_values(values, first.n_nodes, where(index))
+            return np.empty((0, 3), dtype=np.int64), first.edges, first.n_nodes, values, True
+        values = check_values(values, len(first), where(index))
         if faces is None:
-            return np.empty((0, 3), dtype=np.int64), knn_graph(vertices), len(vertices), values
-        return faces, None, len(vertices), values
+            return np.empty((0, 3), dtype=np.int64), knn_graph(first), len(first), values, False
+        return faces, None, len(first), values, False
     raise TypeError(
         f"sample {index}: expected a ScalarField or a (mesh, values) pair, "
         f"got {type(sample).__name__}"
@@ -51,14 +57,26 @@ def _complex_adjacency(faces, edges, n_vertices):
     return edge_adjacency(edges, n_vertices)
 
 
+def _complex(sample, index, entry, keep):
+    """Values, adjacency and cycle structure (``surface`` of :func:`function_diagrams`)
+    of a sample. Essential H1 comes from a closed surface of triangles or a graph's
+    cycles: a point cloud has none (its kNN graph's cycles are artefacts of the
+    neighbourhood size)."""
+    faces, edges, n_vertices, values, is_graph = _sample_arrays(sample, index)
+    if is_graph:
+        cycles = graph_cycles(n_vertices, np.empty((0, 2)) if edges is None else edges)
+        if entry.from_graph:
+            return values, None, cycles
+        return values, edge_adjacency(cycles.edges, n_vertices), cycles
+    adjacency = _complex_adjacency(faces, edges, n_vertices)
+    needs_surface = set(entry.surface_diagrams) & set(keep)
+    surface = closed_surface(faces, adjacency) if needs_surface and edges is None else None
+    return values, adjacency, surface
+
+
 def _diagrams_one(item, *, filtration, essential, min_persistence, keep):
     index, sample = item
-    faces, edges, n_vertices, values = _sample_arrays(sample, index)
-    adjacency = _complex_adjacency(faces, edges, n_vertices)
-    # Essential H1 needs a closed surface of triangles and nothing else: a point cloud
-    # (a graph, whose cycles are artefacts of the neighbourhood size) has none.
-    needs_surface = set(FILTRATIONS[filtration].value.surface_diagrams) & set(keep)
-    surface = closed_surface(faces, adjacency) if needs_surface and edges is None else None
+    values, adjacency, surface = _complex(sample, index, FILTRATIONS[filtration].value, keep)
     diagrams = []
     for column in ScalarField.columns_of(values):
         per_function = function_diagrams(
@@ -84,8 +102,10 @@ class LowerStarPersistence(SampleTransformer):
     On a point cloud (a field without faces, or a ``(points, values)`` pair) the complex
     is its symmetric k-nearest-neighbour graph (``ScalarField.edges``): every H0
     diagram is computed on it exactly as on a mesh's edges, and the essential H1
-    diagram of ``"extended"`` is empty (a graph's cycles come from the neighbourhood
-    size, not from the surface).
+    diagram of ``"extended"`` is empty (that graph's cycles come from the neighbourhood
+    size, not from the surface). On a graph (a field with ``is_graph``, or a ``(graph,
+    values)`` pair) the complex is the graph's nodes and edges, and ``"extended"``
+    gives all of its extended persistence, the cycles included (see Notes).
 
     Parameters
     ----------
@@ -107,8 +127,9 @@ class LowerStarPersistence(SampleTransformer):
           (pairs ``(saddle, max)``; ``Ord1`` on a closed surface), ``ess``
           (``Ext0``) and, on a closed surface (every edge in exactly two triangles),
           the essential H1 pairs with birth below death (``Ext1+``; empty on other
-          meshes). For ``-f`` the four become ``R`` of the second, ``R`` of the
-          first, ``R`` of the third and ``R`` of the fourth.
+          meshes and on point clouds), on a graph one pair ``(min, max)`` per
+          independent cycle. For ``-f`` the four become ``R`` of the second, ``R`` of
+          the first, ``R`` of the third and ``R`` of the fourth.
     essential : {"keep", "drop", "max"}, default="keep"
         Essential classes of ``"sublevel"`` and ``"superlevel"`` (one per component):
         kept with death ``inf``, dropped, or closed at the component's maximum (the
@@ -136,6 +157,7 @@ class LowerStarPersistence(SampleTransformer):
     See Also
     --------
     lower_star_persistence : The H0 diagram of one function.
+    extended_persistence : The four diagrams of one function on a graph, gudhi's way.
     DiagramDistance : The next stage: distances between diagrams.
 
     Notes
@@ -155,6 +177,13 @@ class LowerStarPersistence(SampleTransformer):
     relative position of the sublevel and superlevel flags of H1. On a mesh with
     boundary the first three diagrams are exactly the H0 diagrams named above and the
     fourth is empty; they are then not the whole of extended persistence.
+
+    On a graph the four diagrams are the whole of extended persistence: gudhi's
+    ordinary H0, relative H1, extended H0 and extended H1 (as
+    :func:`extended_persistence` returns them), with the relative H1 pairs and the
+    cycles turned lower value first: ``ord1`` holds gudhi's ``rel1`` pairs ``(max,
+    saddle)`` as ``(saddle, max)`` and ``ext1`` its ``ext1`` pairs ``(birth, death)``
+    as ``(death, birth)``.
 
     The accuracy of each filtration on the Sumner meshes is measured by
     ``python benchmarks/bench_persistence.py --accuracy`` (figures in
@@ -227,7 +256,7 @@ class LowerStarPersistence(SampleTransformer):
 
         Parameters
         ----------
-        X : sequence of ScalarField or (mesh, values) pairs
+        X : sequence of ScalarField or (mesh, values) or (graph, values) pairs
 
         Returns
         -------
