@@ -12,6 +12,7 @@ from sklearn.utils.validation import check_is_fitted, check_memory
 
 from .._base import SampleTransformer, as_sample_list
 from .._param_validation import HasMethods, Interval, Options
+from .._version import VERSION
 from .distances import METRICS, kernel_metric
 from .estimator import DiagramTransformer
 from .pairwise import as_packed, distance_stack
@@ -44,12 +45,12 @@ class PerDiagramDistance(DiagramTransformer):
         Number of lines of the sliced Wasserstein distance (ignored by the others).
     memory : str, path, joblib.Memory or None, default=None
         Where to cache the stacks that ``fit_transform`` and ``transform`` compute,
-        keyed by the diagrams of both sides and the distance parameters. A grid search
-        over the parameters of the later stages (the kernel's bandwidths, the
-        classifier's ``C``) then computes each fold's distances once, its training
-        stack at the first candidate and its test stack at the first score, instead of
-        once per candidate (a pipeline's own ``memory`` caches ``fit_transform`` only).
-        ``None``: no caching.
+        keyed by the diagrams of both sides, the distance parameters and the package's
+        version. A grid search over the parameters of the later stages (the kernel's
+        bandwidths, the classifier's ``C``) then computes each fold's distances once,
+        its training stack at the first candidate and its test stack at the first
+        score, instead of once per candidate (a pipeline's own ``memory`` caches
+        ``fit_transform`` only). ``None``: no caching.
     n_jobs : int, default=None
         Number of parallel jobs (joblib). ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors. Results
@@ -155,8 +156,9 @@ class PerDiagramDistance(DiagramTransformer):
 
     def _stack(self, left, right):
         memory = os.fspath(self.memory) if isinstance(self.memory, os.PathLike) else self.memory
-        compute = check_memory(memory).cache(distance_stack, ignore=["n_jobs"])
+        compute = check_memory(memory).cache(_stack, ignore=["n_jobs"])
         return compute(
+            VERSION,
             left,
             right,
             self.metric,
@@ -166,3 +168,9 @@ class PerDiagramDistance(DiagramTransformer):
             np.dtype(self.dtype),
             n_jobs=self.n_jobs,
         )
+
+
+def _stack(version, left, right, *args, n_jobs=None):
+    """:func:`distance_stack`, with the package's ``version`` in the cache key: a stack
+    cached by another release is computed again."""
+    return distance_stack(left, right, *args, n_jobs=n_jobs)
