@@ -176,6 +176,8 @@ class SlicedWassersteinKernel(_DiagramKernel):
     --------
     sliced_wasserstein_distance : The distance between two diagrams.
     DiagramDistance : The distance matrix (``metric="sliced-wasserstein"``).
+    PerDiagramDistance, DistanceKernel : The same kernel in two stages, for bandwidth
+        searches that compute the distances once.
     PersistenceScaleSpaceKernel, PersistenceWeightedGaussianKernel : Other kernels.
 
     Notes
