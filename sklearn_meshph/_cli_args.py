@@ -20,13 +20,28 @@ from ._version import VERSION
 from .datasets import SAMPLE_EXTENSIONS
 from .pipelines import PRESETS, make_mesh_distance
 from .spectral import LAPLACIANS, SIGNATURES
+from .spectral.laplacians import GRAPH_LAPLACIANS
 
-__all__ = ["build_parser", "build_pipeline", "check_folds", "check_options", "check_output"]
+__all__ = [
+    "GRAPH_PRESET",
+    "build_parser",
+    "build_pipeline",
+    "check_folds",
+    "check_graph_pipeline",
+    "check_options",
+    "check_output",
+    "choose_preset",
+]
+
+#: The preset of a TU dataset folder (graphs) when ``--preset`` is not given.
+GRAPH_PRESET = "graph"
 
 _EPILOG = """\
-the pipeline: --preset picks one of PRESETS (make_mesh_distance); --eigen-index,
---laplacian, --normalization, --signature, --n-scales and --n-eigenpairs override its
-eigen stage when given; --set step__param=value sets any parameter (set_params), e.g.
+the pipeline: --preset picks one of PRESETS (make_mesh_distance; 'graph' by default
+for a TU dataset folder, whose graphs are named 'graph K' after their id in the files);
+--eigen-index, --laplacian, --normalization, --signature, --n-scales and --n-eigenpairs
+override its eigen stage when given; --set step__param=value sets any parameter
+(set_params), e.g.
 --set distance__weights='{"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0.5}'. The stages
 that learn nothing (eigen, persistence) run once for all samples (the eigen stage cached
 in --memory when given); everything else is fitted on each fold's training samples only.
@@ -131,13 +146,15 @@ def build_parser() -> argparse.ArgumentParser:
         "path",
         nargs="?",
         help="folder of meshes or point clouds (.xyz, .pts, PLY without faces) with one "
-        "sub-folder per class (like sklearn's load_files); without it, a small built-in "
-        "synthetic shape set (make_shapes) is generated",
+        "sub-folder per class (like sklearn's load_files), or a TU dataset folder of "
+        "graphs (DS_A.txt, DS_graph_indicator.txt, DS_graph_labels.txt, plain or .gz); "
+        "without it, a small built-in synthetic shape set (make_shapes) is generated",
     )
     parser.add_argument(
         "--preset",
-        default="default",
-        help="the pipeline, one of PRESETS: " + PRESETS.help(),
+        default=None,
+        help=f"the pipeline (default: 'default', or {GRAPH_PRESET!r} for a TU dataset "
+        "folder), one of PRESETS: " + PRESETS.help(),
     )
     parser.add_argument(
         "--memory",
@@ -226,6 +243,27 @@ def check_options(args) -> None:
         raise UsageError(f"--memory must name a folder, got {args.memory!r}")
 
 
+def choose_preset(args, graphs: bool) -> None:
+    """``--preset`` when given, else ``"default"``, or :data:`GRAPH_PRESET` for
+    ``graphs`` (a TU dataset folder)."""
+    if args.preset is None:
+        args.preset = GRAPH_PRESET if graphs else "default"
+
+
+def check_graph_pipeline(pipeline) -> None:
+    """Refuse a pipeline whose eigen stage takes a Laplacian that graphs have not (a
+    surface's, such as ``"cotangent"``), before anything is loaded."""
+    for estimator in _estimators(pipeline):
+        laplacian = estimator.get_params(deep=False).get("laplacian")
+        if isinstance(laplacian, str) and laplacian not in GRAPH_LAPLACIANS:
+            raise UsageError(
+                f"the eigen stage's Laplacian {laplacian!r} is a surface's (meshes, point "
+                "clouds); the graphs of a TU folder take --laplacian "
+                + ", ".join(GRAPH_LAPLACIANS.names)
+                + f" (the {GRAPH_PRESET!r} preset's pipeline is made for them)"
+            )
+
+
 def check_output(output: Path) -> None:
     """Refuse an ``--output`` that cannot be written, without creating anything: a file,
     a path under a file, or a folder where no file can be made."""
@@ -289,7 +327,7 @@ def build_pipeline(args):
     parameter checked; a bad one is a :class:`UsageError`."""
     try:
         pipeline = make_mesh_distance(
-            args.preset,
+            "default" if args.preset is None else args.preset,  # unless choose_preset ran
             memory=args.memory,
             n_jobs=args.n_jobs,
             random_state=args.random_state,

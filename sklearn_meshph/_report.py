@@ -190,6 +190,8 @@ def write_pictures(output: Path, matrix, y, names, fields, random_state, diagram
             ax.set_axis_off()
         written.append(_save(fig, output / "diagrams.png"))
 
+    if fields[0].is_graph:  # a graph's nodes have no positions to draw the function on
+        return written
     fig = plt.figure(figsize=(4 * cols, 3.8 * rows))
     for k, i in enumerate(examples):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")

@@ -1,5 +1,5 @@
-"""The command line's main job: classify a folder of meshes or point clouds (or built-in
-synthetic shapes) end to end with a pipeline of the library.
+"""The command line's main job: classify a folder of meshes or point clouds, a TU dataset
+folder of graphs (or built-in synthetic shapes) end to end with a pipeline of the library.
 
 Run ``python -m sklearn_meshph --help`` (or the ``sklearn-meshph`` console script). The
 pipeline is ``make_mesh_distance(--preset)`` (see :data:`sklearn_meshph.pipelines.PRESETS`)
@@ -38,7 +38,15 @@ from sklearn.neighbors import KNeighborsClassifier
 from sklearn.pipeline import Pipeline
 from sklearn.utils import get_tags
 
-from ._cli_args import build_parser, build_pipeline, check_folds, check_options, check_output
+from ._cli_args import (
+    build_parser,
+    build_pipeline,
+    check_folds,
+    check_graph_pipeline,
+    check_options,
+    check_output,
+    choose_preset,
+)
 from ._cli_messages import (
     DataError,
     Names,
@@ -52,6 +60,7 @@ from ._report import format_confusion, json_safe, wrap, write_data, write_pictur
 from ._version import VERSION
 from .combine import CombinedDistance
 from .datasets import SHAPE_CLASSES, SkippedFilesWarning, load_mesh_folder, make_shapes
+from .graph import Graph, load_tu_dataset, tu_dataset_names
 from .mesh import MeshCleaningWarning
 from .spectral import RepeatedEigenvalueWarning
 
@@ -271,6 +280,28 @@ def _from_folder(args):
     return samples, y, class_names, names.files, names, str(args.path), skipped
 
 
+def _from_tu_folder(args):
+    """The graphs of a TU dataset folder, their labels as classes, each named
+    ``graph K`` after its id in the files."""
+    names = tu_dataset_names(args.path)
+    if len(names) > 1:
+        raise UsageError(
+            f"{str(args.path)!r} holds several TU datasets ({', '.join(names)}); "
+            "give the folder of one"
+        )
+    try:
+        graphs, labels = load_tu_dataset(args.path)
+    except (ValueError, TypeError) as exc:
+        raise DataError(one_line(exc)) from None
+    values, y = np.unique(labels, return_inverse=True)
+    class_names = [str(v) for v in values]
+    check_folds(y, class_names, args.folds, args.neighbors, args.random_state)
+    check_output(args.output)
+    filenames = [f"graph {k}" for k in range(1, len(graphs) + 1)]
+    source = f"TU dataset {names[0]} ({args.path})"
+    return graphs, y, class_names, filenames, Names(filenames, args.path), source, []
+
+
 def _load(args):
     return load_mesh_folder(
         args.path,
@@ -284,7 +315,9 @@ def _load(args):
 def _describe(samples, class_names, source, pipeline, args) -> None:
     n_clouds = sum(isinstance(m, np.ndarray) for m in samples)
     kind = (
-        "meshes"
+        "graphs"
+        if all(isinstance(m, Graph) for m in samples)
+        else "meshes"
         if n_clouds == 0
         else "point clouds"
         if n_clouds == len(samples)
@@ -332,10 +365,14 @@ def _timed(timings, key, function, *args):
 
 def _run(args) -> int:
     check_options(args)
+    graphs = args.path is not None and bool(tu_dataset_names(args.path))
+    choose_preset(args, graphs)
     pipeline = build_pipeline(args)
+    if graphs:
+        check_graph_pipeline(pipeline)
     timings = {}
     start = time.perf_counter()
-    source_of = _built_in if args.path is None else _from_folder
+    source_of = _from_tu_folder if graphs else _built_in if args.path is None else _from_folder
     samples, y, class_names, filenames, names, source, skipped = source_of(args)
     timings["load"] = time.perf_counter() - start
     _describe(samples, class_names, source, pipeline, args)

@@ -1,14 +1,19 @@
 """TU datasets: the text format read into graphs and labels, every bad file named; the
 six shared datasets as their README describes them."""
 
+import csv
 import gzip
+import json
+import re
 
 import numpy as np
 import pytest
 from conftest import data_folder
 
-from sklearn_meshph import Graph, load_tu_dataset
+from sklearn_meshph import Graph, _cli_args, cli, load_tu_dataset
+from sklearn_meshph.cli import main
 from sklearn_meshph.graph import reading, tu_dataset_names
+from sklearn_meshph.pipelines import PRESETS
 
 # Three graphs: a path 1-2-3 (both directions, a repeat), an edge 4-5 with a loop on 4,
 # and node 6 alone. Labels as the file writes them (-1 and 1).
@@ -157,3 +162,87 @@ def test_the_shared_datasets_match_their_readme(name):
     assert np.unique(y, return_counts=True)[1].tolist() == counts
     assert round(np.mean([g.n_nodes for g in graphs]), 1) == mean_nodes
     assert round(np.mean([g.n_edges for g in graphs]), 1) == mean_edges
+
+
+# The main job on a TU folder -----------------------------------------------------
+
+FAST = ["--verbose", "0", "--n-jobs", "1", "--folds", "2"]
+
+
+def _toy(n_graphs=16):
+    """Cycles (label 1) and paths (label 2) of 5 to 12 nodes, as TU files."""
+    edges, ids, labels, start = [], [], [], 1
+    for g in range(n_graphs):
+        n, label = 5 + g % 8, 1 + g % 2
+        pairs = [(start + k, start + k + 1) for k in range(n - 1)]
+        pairs += [(start, start + n - 1)] if label == 1 else []
+        edges += [f"{i}, {j}\n{j}, {i}\n" for i, j in pairs]
+        ids += [f"{g + 1}\n"] * n
+        labels.append(f"{label}\n")
+        start += n
+    return {"A": "".join(edges), "graph_indicator": "".join(ids), "graph_labels": "".join(labels)}
+
+
+@pytest.fixture
+def graph_preset(monkeypatch):
+    """The main job's preset for graphs: "graph", or while PRESETS has none, a stand-in
+    whose Laplacian graphs take ("paper")."""
+    if _cli_args.GRAPH_PRESET not in PRESETS:
+        monkeypatch.setattr(_cli_args, "GRAPH_PRESET", "paper")
+    return _cli_args.GRAPH_PRESET
+
+
+def _error_line(capfd) -> str:
+    captured = capfd.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: "), captured.err
+    assert "Traceback" not in captured.err + captured.out
+    return lines[0]
+
+
+def test_the_main_job_classifies_a_tu_folder(tmp_path, capsys, graph_preset):
+    folder = write_tu(tmp_path / "TOY", _toy(), name="TOY", compress=True)
+    out = tmp_path / "out"
+    assert main([str(folder), *FAST, "--output", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert f"data: TU dataset TOY ({folder}): 16 graphs, 2 classes" in printed
+    assert f"preset {graph_preset!r}" in printed
+    assert "pictures in" in printed and not (out / "eigenfunctions.png").exists()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["preset"] == graph_preset and summary["n_samples"] == 16
+    assert summary["class_names"] == ["1", "2"] and summary["class_counts"] == [8, 8]
+    with open(out / "predictions.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert [row["file"] for row in rows[:3]] == ["graph 1", "graph 2", "graph 3"]
+    assert [row["true label"] for row in rows[:3]] == ["1", "2", "1"]
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        ["--laplacian", "cotangent"],
+        ["--set", "eigen__laplacian=cotangent"],
+        ["--preset", "default"],
+    ],
+)
+def test_a_surface_laplacian_on_graphs_is_one_line_before_loading(
+    tmp_path, capfd, monkeypatch, graph_preset, options
+):
+    monkeypatch.setattr(cli, "load_tu_dataset", None)  # loading would fail the test
+    folder = write_tu(tmp_path / "TOY", _toy(), name="TOY")
+    assert main([str(folder), *FAST, "--no-plots", "--output", str(tmp_path), *options]) == 2
+    assert "Laplacian 'cotangent' is a surface's" in _error_line(capfd)
+
+
+def test_bad_tu_folders_are_one_line_in_the_main_job(tmp_path, capfd, graph_preset):
+    argv = [*FAST, "--no-plots", "--output", str(tmp_path / "out")]
+    broken = write_tu(tmp_path / "broken", {**_toy(), "A": "1, 2\n2, x\n"}, name="TOY")
+    assert main([str(broken), *argv]) == 1
+    assert re.search(r"TOY_A.txt': line 2 holds 'x', not an integer$", _error_line(capfd))
+    two = write_tu(tmp_path / "two", _toy(), name="TOY")
+    write_tu(two, _toy(), name="OTHER")
+    assert main([str(two), *argv]) == 2
+    assert "holds several TU datasets (OTHER, TOY); give the folder of one" in _error_line(capfd)
+    assert main([str(write_tu(tmp_path / "few", _toy(6), name="TOY")), *argv, "--folds", "4"]) == 2
+    assert "fewer samples than --folds 4" in _error_line(capfd)
+    assert not (tmp_path / "out").exists()
