@@ -1,6 +1,7 @@
 """Graphs as input: every form check_graph accepts gives the same Graph, and every bad
 graph is refused with a message naming the sample."""
 
+import pickle
 import subprocess
 import sys
 
@@ -131,6 +132,9 @@ def test_a_graph_is_returned_as_is_and_checked_when_made():
     assert not graph.edges.flags.writeable
     adjacency = graph.adjacency()
     assert (adjacency != adjacency.T).nnz == 0 and adjacency[2, 1] == 2.0
+    restored = pickle.loads(pickle.dumps(graph))  # as joblib sends samples to workers
+    assert restored.n_nodes == 3 and not restored.edges.flags.writeable
+    np.testing.assert_array_equal(restored.node_values, graph.node_values)
 
 
 @pytest.mark.parametrize(

@@ -138,6 +138,9 @@ class Graph:
         if node_values is not None:
             object.__setattr__(self, "node_values", _frozen(node_values))
 
+    def __reduce__(self):  # unpickled through __init__: checked, arrays read-only again
+        return type(self), (self.n_nodes, self.edges, self.weights, self.node_values)
+
     @property
     def n_edges(self) -> int:
         """Number of (undirected) edges."""
