@@ -1,4 +1,5 @@
-"""Compiled local Delaunay triangulations: the triangles around each point of a cloud.
+"""Local triangulations of a point cloud: each point's surface neighbours, its tangent
+frame, and the Delaunay triangles around it (compiled).
 
 A change here changes the numbers a solve gives: bump
 :data:`sklearn_meshph.spectral.cache.NUMERICS_VERSION` (a test checks).
@@ -8,6 +9,141 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from scipy.spatial import cKDTree
+
+from ..mesh import DEGENERATE_SINE
+
+__all__ = [
+    "LOCAL_NEIGHBORS",
+    "MAX_SLOPE",
+    "MIN_NORMAL_COSINE",
+    "NORMAL_NEIGHBORS",
+    "local_delaunay_fans",
+    "nearest",
+    "surface_neighbours",
+    "tangent_fans",
+]
+
+#: Neighbours per point from which its local triangulation is made.
+LOCAL_NEIGHBORS = 30
+
+#: Nearest neighbours whose principal plane is a point's first estimate of its tangent
+#: plane: few enough to stay on one side of a thin part.
+NORMAL_NEIGHBORS = 10
+
+#: A neighbour is off the surface at a point when its height over the point's tangent
+#: plane exceeds this times its distance (or, nearer than the ``NORMAL_NEIGHBORS``-th
+#: neighbour, times that neighbour's distance): 0.7 is the chord of a cylinder between
+#: points a quarter turn apart, so the far side of a thin part is cut off.
+MAX_SLOPE = 0.7
+
+#: Surface neighbours have tangent planes within 60 degrees of each other (unoriented
+#: normals: the absolute cosine).
+MIN_NORMAL_COSINE = 0.5
+
+
+def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarray]:
+    """Distances and indices ``(n, k)`` of each point's ``k`` nearest other points,
+    nearest first (``k = min(n_neighbors, n - 1)``), by an exact k-d tree search."""
+    k = min(n_neighbors, len(points) - 1)
+    distances, indices = cKDTree(points).query(points, k + 1)
+    # The point itself comes first, unless a duplicate of it does: drop it wherever it is.
+    itself = indices == np.arange(len(points))[:, None]
+    itself[~itself.any(axis=1), -1] = True
+    keep = ~itself
+    return distances[keep].reshape(-1, k), indices[keep].reshape(-1, k)
+
+
+def _frames(relative: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals ``(n, 3)`` and tangent bases ``(n, 3, 2)``: the principal directions
+    of the weighted neighbours, relative to each point (the plane goes through it)."""
+    covariance = np.einsum("nk,nki,nkj->nij", weights, relative, relative)
+    directions = np.linalg.eigh(covariance)[1]
+    return directions[:, :, 0], directions[:, :, 1:]
+
+
+def _flat(relative, normal, reach):
+    """Neighbours whose height over the tangent plane is within ``MAX_SLOPE`` of their
+    ``reach`` (distance, at least the ``NORMAL_NEIGHBORS``-th neighbour's)."""
+    return np.abs(np.einsum("nki,ni->nk", relative, normal)) <= MAX_SLOPE * reach
+
+
+def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
+    """Each point's nearest neighbours, which of them are on its own sheet, and its frame.
+
+    The ``n_neighbors`` nearest points may reach across a thin part (the other side of a
+    finger) or to a part nearby (a leg against the body). A first tangent plane comes
+    from the ``NORMAL_NEIGHBORS`` nearest; neighbours too high above it for their
+    distance (:data:`MAX_SLOPE`) are left out, and the plane is fitted again to the rest
+    (as many as the surface gives: as steady as a wide neighbourhood under noise). The
+    neighbours kept are those low over that plane and whose own normal is within
+    :data:`MIN_NORMAL_COSINE` of the point's.
+
+    Returns ``(neighbors, relative, usable, normal, basis)``: indices ``(n, k)``,
+    positions relative to the point ``(n, k, 3)``, the mask of the neighbours kept
+    ``(n, k)``, unit normals ``(n, 3)`` and tangent bases ``(n, 3, 2)``.
+    """
+    distances, neighbors = nearest(points, n_neighbors)
+    relative = points[neighbors] - points[:, None, :]
+    first = min(NORMAL_NEIGHBORS, neighbors.shape[1])
+    reach = np.maximum(distances, distances[:, first - 1 : first])
+    nearest_ones = np.zeros(neighbors.shape)
+    nearest_ones[:, :first] = 1.0
+    normal, _ = _frames(relative, nearest_ones)
+    normal, basis = _frames(relative, _flat(relative, normal, reach).astype(np.float64))
+    agree = np.abs(np.einsum("nki,ni->nk", normal[neighbors], normal)) >= MIN_NORMAL_COSINE
+    usable = _flat(relative, normal, reach) & agree
+    return neighbors, relative, usable, normal, basis
+
+
+def _heights(coords, height, usable, unit):
+    """Heights of the neighbours over the point on the quadric fitted to the kept ones.
+
+    ``z = c0 + c1 x + c2 y + c3 x^2 + c4 x y + c5 y^2`` by least squares over the point
+    itself (at the origin) and its kept neighbours, in units of ``unit`` (n, 1); a point
+    with fewer than 8 samples keeps its tangent plane (heights zero). Returns the fitted
+    heights of the neighbours minus the point's, ``(n, k)``: the surface's bend without
+    the noise across it.
+    """
+    x, y = coords[..., 0] / unit, coords[..., 1] / unit
+    terms = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=-1)
+    weights = usable.astype(np.float64)
+    gram = np.einsum("nk,nki,nkj->nij", weights, terms, terms)
+    gram[:, 0, 0] += 1.0  # the point itself, at height zero
+    gram += 1e-6 * np.eye(6)
+    moments = np.einsum("nk,nki,nk->ni", weights, terms, height / unit)
+    coefficients = np.linalg.solve(gram, moments[..., None])[..., 0]
+    coefficients[usable.sum(axis=1) < 7] = 0.0
+    return (np.einsum("nki,ni->nk", terms, coefficients) - coefficients[:, :1]) * unit
+
+
+def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
+    """Every point's local Delaunay triangles among its surface neighbours.
+
+    The neighbours kept by :func:`surface_neighbours` are projected onto the point's
+    tangent plane and the Delaunay triangles at the point kept
+    (:func:`local_delaunay_fans`). Each triangle is measured on the quadric fitted to
+    the point's neighbourhood: tangent coordinates, and the fitted height (the bend of
+    a thin part is kept, the noise across the surface is not). Returns
+    ``(triangles, a, b)``: the triangles ``(m, 3)`` as point indices ``(i, j, k)``, and
+    the edge vectors from ``i`` to ``j`` and to ``k`` in that frame, ``(m, 3)`` each.
+    Degenerate triangles (twice the area at most
+    :data:`sklearn_meshph.mesh.DEGENERATE_SINE` times the longest edge squared) are
+    dropped. ``points`` must be distinct.
+    """
+    neighbors, relative, usable, normal, basis = surface_neighbours(points, n_neighbors)
+    coords = np.ascontiguousarray(np.einsum("nki,nij->nkj", relative, basis))
+    unit = np.linalg.norm(relative[:, min(NORMAL_NEIGHBORS, neighbors.shape[1]) - 1], axis=1)
+    lift = _heights(coords, np.einsum("nki,ni->nk", relative, normal), usable, unit[:, None])
+    fans = local_delaunay_fans(coords, usable)
+    i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
+    a = np.column_stack([coords[i, ja], lift[i, ja]])
+    b = np.column_stack([coords[i, jb], lift[i, jb]])
+    double_area = np.linalg.norm(np.cross(a, b), axis=1)
+    longest = np.maximum(np.maximum((a * a).sum(1), (b * b).sum(1)), ((b - a) ** 2).sum(1))
+    keep = double_area > DEGENERATE_SINE * longest
+    triangles = np.column_stack([i, neighbors[i, ja], neighbors[i, jb]])[keep]
+    return triangles, a[keep], b[keep]
 
 
 @numba.njit(cache=True)
@@ -42,11 +178,12 @@ def _clip(px, py, labels, m, ax, ay, c, j, qx, qy, qlabels):
 
 
 @numba.njit(cache=True)
-def local_delaunay_fans(coords):
+def local_delaunay_fans(coords, usable):
     """The Delaunay triangles around each point, in its own tangent plane.
 
     ``coords[i, j]`` are the 2-D tangent coordinates of the ``j``-th nearest neighbour
-    of point ``i`` relative to it (nearest first). The
+    of point ``i`` relative to it (nearest first), ``usable[i, j]`` whether it may be a
+    corner (the others are ignored). The
     Voronoi cell of the origin among those neighbours is cut out of a box by the
     bisectors, nearest first (a bisector that cannot cut the cell is skipped); two
     consecutive cell edges made by neighbours ``a`` and ``b`` meet at the circumcentre
@@ -66,7 +203,8 @@ def local_delaunay_fans(coords):
     for i in range(n):
         reach = 0.0
         for j in range(k):
-            reach = max(reach, abs(coords[i, j, 0]), abs(coords[i, j, 1]))
+            if usable[i, j]:
+                reach = max(reach, abs(coords[i, j, 0]), abs(coords[i, j, 1]))
         # Far enough that every bounded cell vertex of a reasonable triangle is inside:
         # only slivers along the boundary of the neighbourhood are cut off.
         box = 16.0 * reach
@@ -78,7 +216,7 @@ def local_delaunay_fans(coords):
         for j in range(k):
             ax, ay = coords[i, j, 0], coords[i, j, 1]
             c = 0.5 * (ax * ax + ay * ay)
-            if c == 0.0:
+            if c == 0.0 or not usable[i, j]:
                 continue  # on top of the point in the tangent plane
             cuts = False
             for t in range(m):

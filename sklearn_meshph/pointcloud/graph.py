@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from ..mesh import unit_box
 from ..mesh.graph import connected_components
+from ._triangulation import nearest
 
 __all__ = [
     "FAR_EDGE_RATIO",
@@ -43,18 +43,6 @@ def canonical_order(points: np.ndarray) -> np.ndarray:
     back, so that permuting the input permutes the output exactly (bit for bit).
     """
     return np.lexsort((points[:, 2], points[:, 1], points[:, 0]))
-
-
-def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarray]:
-    """Distances and indices ``(n, k)`` of each point's ``k`` nearest other points,
-    nearest first (``k = min(n_neighbors, n - 1)``), by an exact k-d tree search."""
-    k = min(n_neighbors, len(points) - 1)
-    distances, indices = cKDTree(points).query(points, k + 1)
-    # The point itself comes first, unless a duplicate of it does: drop it wherever it is.
-    itself = indices == np.arange(len(points))[:, None]
-    itself[~itself.any(axis=1), -1] = True
-    keep = ~itself
-    return distances[keep].reshape(-1, k), indices[keep].reshape(-1, k)
 
 
 def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndarray:

@@ -1,8 +1,9 @@
 """Laplacians of point clouds, one per entry of the mesh registry ``LAPLACIANS``.
 
 - ``"cotangent"``: :func:`point_cloud_laplacian`, the cotangent Laplace-Beltrami
-  operator of the union of local Delaunay triangulations, each point's triangles
-  measured in its own tangent plane, stiffness and mass divided by three since a
+  operator of the union of local Delaunay triangulations of each point's neighbours on
+  its own sheet of the surface, each point's triangles measured on the quadric fitted
+  to its neighbourhood, stiffness and mass divided by three since a
   triangle on which the neighbourhoods agree appears once per corner. It converges to
   the surface's operator under refinement, with uniform or uneven sampling and with
   noise below the sampling's spacing (measured against the unit sphere's spectrum in
@@ -23,45 +24,13 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
-from ..mesh import DEGENERATE_SINE
 from ..mesh.graph_laplacians import from_combinatorial, normalized_laplacian, random_walk_laplacian
 from ..mesh.validation import check_vertices
-from ._triangulation import local_delaunay_fans
-from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph, nearest
+from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
+from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph
 from .validation import MIN_POINTS
 
 __all__ = ["CLOUD_LAPLACIANS", "LOCAL_NEIGHBORS", "point_cloud_laplacian", "tangent_fans"]
-
-#: Neighbours per point from which its local triangulation is made.
-LOCAL_NEIGHBORS = 30
-
-
-def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
-    """Every point's local Delaunay triangles, in its own tangent plane.
-
-    Each point's tangent plane is the plane of the two principal directions of its
-    ``n_neighbors`` nearest neighbours (relative to the point); the neighbours are
-    projected onto it and the Delaunay triangles at the point kept
-    (:func:`._triangulation.local_delaunay_fans`). Returns ``(triangles, a, b)``: the
-    triangles ``(m, 3)`` as point indices ``(i, j, k)``, and the tangent coordinates of
-    ``j`` and ``k`` relative to ``i`` in the plane of ``i``, ``(m, 2)`` each, counter-
-    clockwise. Degenerate triangles (twice the area at most
-    :data:`sklearn_meshph.mesh.DEGENERATE_SINE` times the longest edge squared) are
-    dropped. ``points`` must be distinct.
-    """
-    _, neighbors = nearest(points, n_neighbors)
-    relative = points[neighbors] - points[:, None, :]
-    covariance = np.einsum("nki,nkj->nij", relative, relative)
-    basis = np.linalg.eigh(covariance)[1][:, :, 1:]  # the two largest directions
-    coords = np.ascontiguousarray(np.einsum("nki,nij->nkj", relative, basis))
-    fans = local_delaunay_fans(coords)
-    i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
-    a, b = coords[i, ja], coords[i, jb]
-    double_area = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    longest = np.maximum(np.maximum((a * a).sum(1), (b * b).sum(1)), ((b - a) ** 2).sum(1))
-    keep = double_area > DEGENERATE_SINE * longest
-    triangles = np.column_stack([i, neighbors[i, ja], neighbors[i, jb]])[keep]
-    return triangles, a[keep], b[keep]
 
 
 @validate_params({"n_neighbors": [Interval(Integral, 3, None, closed="left")]})
@@ -87,20 +56,23 @@ def point_cloud_laplacian(
 
     Notes
     -----
-    Every point's neighbours are projected onto its tangent plane (principal component
-    analysis) and the Delaunay triangles at the point kept. Each triangle of a point's
-    fan contributes the cotangent stiffness and barycentric mass (as in
-    :func:`cotangent_laplacian`) of its shape *in that tangent plane*; the sum over all
-    fans is divided by three, since a triangle on which the neighbourhoods agree is in
-    the fans of its three corners. Neighbourhoods that disagree contribute each of their
-    choices with its share; every triangle's stiffness is positive semi-definite, so the
-    sum is too. Measuring in the tangent planes leaves out the normal component of the
-    noise, which would otherwise add area at the sampling scale and lower the spectrum
-    of a rough sample. This is the local
-    triangulation of [1]_ (section 5.7) with an exact neighbour search, tangent-plane
-    geometry and without the tufted cover and intrinsic Delaunay flips, which on
-    randomly sampled clouds lower the spectrum (the measurements are in
-    ``docs/point_clouds.md``).
+    Every point's neighbours on its own sheet of the surface
+    (:func:`._triangulation.surface_neighbours`: not across a thin part, not on a part
+    nearby) are projected onto its tangent plane and the Delaunay triangles at the
+    point kept. Each triangle of a point's fan contributes the cotangent stiffness and
+    barycentric mass (as in :func:`cotangent_laplacian`) of its shape on the quadric
+    fitted to the point's neighbourhood (tangent coordinates and fitted heights); the
+    sum over all fans is divided by three, since a triangle on which the neighbourhoods
+    agree is in the fans of its three corners. Neighbourhoods that disagree contribute
+    each of their choices with its share; every triangle's stiffness is positive
+    semi-definite, so the sum is too. Neighbours across a thin part would be folded
+    into the fan by the projection, short-circuiting the surface (a stiffer operator,
+    less area); the fitted heights keep the bend of a thin part and leave out the
+    noise across the surface, which would otherwise add area at the sampling scale.
+    This is the local triangulation of [1]_ (section 5.7) with an exact neighbour
+    search, surface neighbourhoods, fitted geometry and without the tufted cover and
+    intrinsic Delaunay flips, which on randomly sampled clouds lower the spectrum (the
+    measurements are in ``docs/point_clouds.md``).
 
     References
     ----------
@@ -114,7 +86,7 @@ def point_cloud_laplacian(
     >>> points = np.asarray(trimesh.creation.icosphere(3).vertices)
     >>> L, M = point_cloud_laplacian(points)
     >>> round(float(M.sum()), 2)  # the area of the unit sphere, 4 pi = 12.57
-    12.45
+    12.51
     """
     points = check_vertices(points, "points")
     if len(points) < MIN_POINTS:
@@ -123,7 +95,7 @@ def point_cloud_laplacian(
         )
     n = len(points)
     triangles, a, b = tangent_fans(points, n_neighbors)
-    double_area = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    double_area = np.linalg.norm(np.cross(a, b), axis=1)
     # The cotangent of a corner is the dot product of its two edges over twice the
     # area; an edge weighs half the cotangent of the corner opposite it.
     at_centre = (a * b).sum(1) / double_area
