@@ -26,51 +26,97 @@ import numpy as np
 import scipy.sparse as sp
 
 __all__ = [
+    "OPERATORS",
     "adjacency_of",
     "combinatorial_laplacian",
+    "edge_entries",
     "from_combinatorial",
     "normalized_laplacian",
     "random_walk_laplacian",
 ]
 
 
-def _degrees(adjacency: sp.spmatrix) -> np.ndarray:
-    return np.asarray(adjacency.sum(axis=1), dtype=np.float64).ravel()
+def _entries(adjacency: sp.spmatrix):
+    """``(n, rows, cols, weights)`` of the stored entries of ``adjacency``."""
+    adjacency = sp.csr_matrix(adjacency)
+    n = adjacency.shape[0]
+    rows = np.repeat(np.arange(n), np.diff(adjacency.indptr))
+    return n, rows, adjacency.indices, adjacency.data.astype(np.float64)
+
+
+def edge_entries(n_nodes: int, edges: np.ndarray, weights: np.ndarray):
+    """``(n, rows, cols, weights)`` of the adjacency of undirected ``edges`` (each once,
+    no self-loop): the entries of both directions, without building the matrix."""
+    rows = np.concatenate([edges[:, 0], edges[:, 1]])
+    cols = np.concatenate([edges[:, 1], edges[:, 0]])
+    return n_nodes, rows, cols, np.concatenate([weights, weights]).astype(np.float64)
+
+
+def _operator(n, rows, cols, off_diagonal, diagonal) -> sp.csr_matrix:
+    """The CSR matrix of ``off_diagonal`` at ``(rows, cols)`` (distinct, off the
+    diagonal) and of ``diagonal``, built from the arrays at once: scipy's sparse
+    arithmetic costs more than a small graph's whole solve."""
+    nodes = np.arange(n)
+    rows, cols = np.concatenate([rows, nodes]), np.concatenate([cols, nodes])
+    order = np.lexsort((cols, rows))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    data = np.concatenate([off_diagonal, diagonal])[order]
+    return sp.csr_matrix((data, cols[order], indptr), shape=(n, n))
+
+
+def _diagonal(values: np.ndarray) -> sp.dia_matrix:
+    return sp.dia_matrix((values[None, :], [0]), shape=(len(values), len(values)))
+
+
+def _combinatorial(n, rows, cols, weights):
+    degrees = np.bincount(rows, weights=weights, minlength=n)
+    return _operator(n, rows, cols, -weights, degrees), _diagonal(np.ones(n))
+
+
+def _normalized(n, rows, cols, weights):
+    degrees = np.bincount(rows, weights=weights, minlength=n)
+    connected = degrees > 0
+    root = np.zeros(n)
+    root[connected] = 1.0 / np.sqrt(degrees[connected])
+    off_diagonal = -(root[rows] * weights * root[cols])
+    L = _operator(n, rows, cols, off_diagonal, connected.astype(np.float64))
+    return L, _diagonal(np.ones(n))
+
+
+def _random_walk(n, rows, cols, weights):
+    degrees = np.bincount(rows, weights=weights, minlength=n)
+    mass = np.where(degrees > 0, degrees, 1.0)
+    return _operator(n, rows, cols, -weights, degrees), _diagonal(mass)
+
+
+#: The operators of entries ``(n, rows, cols, weights)`` (see :func:`edge_entries`), by
+#: the names of the Laplacian registries.
+OPERATORS = {"graph": _combinatorial, "normalized": _normalized, "random_walk": _random_walk}
 
 
 def combinatorial_laplacian(adjacency: sp.spmatrix) -> tuple[sp.csr_matrix, sp.dia_matrix]:
     """``L = D - A`` and ``M = I``."""
-    n = adjacency.shape[0]
-    L = (sp.diags(_degrees(adjacency)) - adjacency).tocsr()
-    return L, sp.identity(n, format="dia")
+    return _combinatorial(*_entries(adjacency))
 
 
 def normalized_laplacian(adjacency: sp.spmatrix) -> tuple[sp.csr_matrix, sp.dia_matrix]:
     """``L = I - D^-1/2 A D^-1/2`` (``L_ii = 0`` at an isolated node) and ``M = I``."""
-    n = adjacency.shape[0]
-    degrees = _degrees(adjacency)
-    connected = degrees > 0
-    root = np.zeros(n)
-    root[connected] = 1.0 / np.sqrt(degrees[connected])
-    scaling = sp.diags(root)
-    L = sp.diags(connected.astype(np.float64)) - scaling @ adjacency @ scaling
-    return L.tocsr(), sp.identity(n, format="dia")
+    return _normalized(*_entries(adjacency))
 
 
 def random_walk_laplacian(adjacency: sp.spmatrix) -> tuple[sp.csr_matrix, sp.dia_matrix]:
     """``L = D - A`` and ``M = D`` (1 at an isolated node): ``I - D^-1 A`` as a
     symmetric generalized problem."""
-    degrees = _degrees(adjacency)
-    L = (sp.diags(degrees) - adjacency).tocsr()
-    return L, sp.diags(np.where(degrees > 0, degrees, 1.0))
+    return _random_walk(*_entries(adjacency))
 
 
 def adjacency_of(stiffness: sp.spmatrix) -> sp.csr_matrix:
     """The weighted adjacency ``A = diag(L) - L`` of a combinatorial Laplacian ``L``."""
-    stiffness = sp.csr_matrix(stiffness)
-    adjacency = sp.diags(stiffness.diagonal()) - stiffness
-    adjacency.eliminate_zeros()
-    return adjacency.tocsr()
+    stiffness = sp.csr_matrix(stiffness, copy=True)
+    stiffness.setdiag(0.0)
+    stiffness.eliminate_zeros()
+    return -stiffness
 
 
 def from_combinatorial(operator, build):

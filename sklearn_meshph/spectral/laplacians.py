@@ -35,7 +35,9 @@ from .._registry import Option, Registry
 from ..graph.validation import Graph
 from ..mesh.graph import edge_matrix_csr, mesh_edges
 from ..mesh.graph_laplacians import (
+    OPERATORS,
     combinatorial_laplacian,
+    edge_entries,
     from_combinatorial,
     normalized_laplacian,
     random_walk_laplacian,
@@ -119,13 +121,13 @@ def _graph(vertices, faces):
     return graph_laplacian(faces, len(vertices))
 
 
-def _of_graph(operator):
-    """``operator`` on a graph sample's weighted adjacency."""
+def _of_graph(name: str):
+    """The Laplacian ``name`` of a graph sample, from its edges and weights."""
 
     def discretization(graph: Graph):
-        return operator(graph.adjacency())
+        return OPERATORS[name](*edge_entries(graph.n_nodes, graph.edges, graph.weights))
 
-    discretization.__doc__ = f"{operator.__name__} of a graph sample"
+    discretization.__doc__ = f"the {name!r} Laplacian of a graph sample"
     return discretization
 
 
@@ -168,10 +170,10 @@ GRAPH_LAPLACIANS = Registry(
     [
         Option(
             "graph",
-            _of_graph(combinatorial_laplacian),
+            _of_graph("graph"),
             "combinatorial graph Laplacian `D - A` of the weighted adjacency, `M = I`",
         ),
-        Option("normalized", _of_graph(normalized_laplacian), _NORMALIZED),
-        Option("random_walk", _of_graph(random_walk_laplacian), _RANDOM_WALK),
+        Option("normalized", _of_graph("normalized"), _NORMALIZED),
+        Option("random_walk", _of_graph("random_walk"), _RANDOM_WALK),
     ],
 )
