@@ -3,7 +3,6 @@ pruned by lower bounds, in bounded memory; and 1-NN classification on top."""
 
 from __future__ import annotations
 
-import copy
 from numbers import Integral
 
 import numpy as np
@@ -17,7 +16,7 @@ from .._base import as_sample_list
 from .._param_validation import HasMethods, Interval, Options, check_params
 from ..combine import CombinedDistance
 from ..pipelines import make_mesh_distance
-from .bounds import PartBound, is_indexable
+from .parts import IndexedPart, is_indexable
 
 __all__ = ["ShapeNeighbors", "ShapeNeighborsClassifier"]
 
@@ -107,8 +106,8 @@ class _ShapeIndex(BaseEstimator):
         metric.fit(fields)
         known = dict(zip(chosen.tolist(), fields, strict=True))
         self.distance_, self.scale_indices_, self.n_samples_fit_ = distance, chosen, n
-        self._bounds = [
-            (name, factor, stateless, PartBound(final, 1.0 if factor is None else factor))
+        self._parts = [
+            (name, factor, stateless, IndexedPart(final, 1.0 if factor is None else factor))
             for name, factor, stateless, final in _fitted_parts(metric)
         ]
 
@@ -122,27 +121,26 @@ class _ShapeIndex(BaseEstimator):
 
         self.rows_ = self._part_rows(fields_of, n)
         self._vectors = [
-            bound.fit(self.rows_[name]).embed(self.rows_[name])
-            for name, _, _, bound in self._bounds
+            part.fit(self.rows_[name]).embed(self.rows_[name]) for name, _, _, part in self._parts
         ]
         return self
 
     def _part_rows(self, fields_of, n):
         """Each part's validated rows of ``n`` samples, by part name, block by block
         (``fields_of(start, stop)``: the head's output for the samples of a block)."""
-        rows = {name: [] for name, *_ in self._bounds}
+        rows = {name: [] for name, *_ in self._parts}
 
         def through(start, stop):
             block = fields_of(start, stop)
-            for name, _, stateless, bound in self._bounds:
+            for name, _, stateless, part in self._parts:
                 out = block if stateless is None else stateless.transform(block)
-                rows[name].extend(bound.validate(out))
+                rows[name].extend(part.validate(out))
 
         for start, stop in _blocks(n, self.block_size):
             _in_block(through, start, stop)
         return {
-            name: rows[name] if bound.diagrams else np.asarray(rows[name], float).reshape(n, -1)
-            for name, _, _, bound in self._bounds
+            name: rows[name] if part.diagrams else np.asarray(rows[name], float).reshape(n, -1)
+            for name, _, _, part in self._parts
         }
 
     def _represent(self, X):
@@ -156,18 +154,11 @@ class _ShapeIndex(BaseEstimator):
         return self._part_rows(fields_of, len(samples))
 
     def _exact(self, query, cols):
-        """The exact ``(n_queries, len(cols))`` distances of query rows to fitted samples
-        ``cols``: each part's own fitted last step on the candidates (a shallow copy
-        holding their rows), combined as the fitted metric combines the parts."""
+        """The exact ``(n_queries, len(cols))`` distances of query rows to the fitted
+        samples ``cols``, the parts combined as the fitted metric combines them."""
         total = None
-        for name, factor, _, bound in self._bounds:
-            view = copy.copy(bound.final)
-            fitted = self.rows_[name]
-            if bound.diagrams:
-                view.diagrams_ = [fitted[j] for j in cols]
-            else:
-                view.features_ = fitted[cols]
-            matrix = np.asarray(view.transform(query[name]), dtype=float)
+        for name, factor, _, part in self._parts:
+            matrix = np.asarray(part.exact(query[name], cols), dtype=float)
             term = matrix if factor is None else factor * matrix
             total = term if total is None else total + term
         return total
@@ -175,8 +166,8 @@ class _ShapeIndex(BaseEstimator):
     def _lower(self, query):
         """Lower bounds of the combined distance of query rows to every fitted sample."""
         total = None
-        for (name, _, _, bound), fitted in zip(self._bounds, self._vectors, strict=True):
-            term = bound.lower(bound.embed(query[name]), fitted)
+        for (name, _, _, part), fitted in zip(self._parts, self._vectors, strict=True):
+            term = part.lower(part.embed(query[name]), fitted)
             total = term if total is None else total + term
         return total
 
@@ -194,7 +185,7 @@ class _ShapeIndex(BaseEstimator):
             cols = order[done : done + batch]
             distances.append(self._exact(query, cols)[0])
             indices.append(cols)
-            done, batch = done + len(cols), 2 * batch
+            done, batch = done + len(cols), batch + batch // 2
             if done >= k and done < n_finite:
                 kth = np.partition(np.concatenate(distances), k - 1)[k - 1]
                 if safe[done] > kth:
@@ -370,7 +361,7 @@ class ShapeNeighbors(_ShapeIndex):
     Notes
     -----
     A part of weight 0 is left out. Lower bounds are described in
-    :mod:`sklearn_meshph.retrieval.bounds`; the fraction of exact distances a query
+    :mod:`sklearn_meshph.retrieval.parts`; the fraction of exact distances a query
     computes is :meth:`exact_fraction`; measured costs are in ``docs/scale.md``.
 
     Examples

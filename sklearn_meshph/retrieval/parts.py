@@ -1,4 +1,9 @@
-"""Lower bounds of the fitted distances of a collection, for every fitted sample at once.
+"""The parts of a fitted metric as an index reads them: exact distances from a query
+to chosen fitted samples, and lower bounds of them for every fitted sample at once.
+
+Exact distances are the part's own compiled kernels (:func:`pair_distances`) on the
+pairs asked for, combined as its last step combines them: the same operations on the
+same numbers as its ``transform``, so the same bits.
 
 Each part of a fitted metric (a :class:`DiagramDistance` or a :class:`FeatureDistance`)
 turns its samples into fixed-length rows whose distance, taken for all fitted rows in
@@ -30,9 +35,11 @@ from sklearn.metrics import pairwise_distances
 
 from ..combine import FeatureDistance
 from ..diagrams import DiagramDistance
+from ..diagrams.distances import kernel_metric
+from ..diagrams.pairwise import as_packed, pack_for_metric, pair_distances
 from ..diagrams.validation import check_samples
 
-__all__ = ["N_TOP", "PartBound"]
+__all__ = ["N_TOP", "IndexedPart", "is_indexable"]
 
 # Distances to the diagonal kept per diagram (the rest as one norm).
 N_TOP = 16
@@ -49,12 +56,12 @@ def _norm(values, q):
     return top * float(np.sum((values / top) ** q)) ** (1.0 / q)
 
 
-class PartBound:
-    """The lower bound of one fitted part's distance, and the rows it reads.
+class IndexedPart:
+    """One fitted part of a metric: its exact distances and their lower bounds.
 
     ``final`` is the fitted last step of the part, ``factor`` the part's weight over
-    its scale in the combination. :meth:`fit` sets the number of essential births kept
-    per diagram position from the fitted rows.
+    its scale in the combination. :meth:`fit` packs the fitted rows for the kernels and
+    sets the number of essential births kept per diagram position.
     """
 
     def __init__(self, final, factor):
@@ -68,17 +75,62 @@ class PartBound:
         self.q = np.inf if metric == "bottleneck" or np.isinf(order) else order
         self.factor_p = 1.0 if np.isinf(self.q) or np.isinf(p) else 2.0 ** (1.0 / p)
         self.scales = np.asarray(final.scales_, dtype=float)
+        self.code, self.order = kernel_metric(metric, order, p)
+        self.whole = params["normalization"] == "none"  # a tuple at once, else by position
+
+    def _pack(self, rows):
+        """Validated rows packed for the kernel: whole tuples, or one pack per position."""
+        packed = as_packed(rows)
+        n_directions = self.final.distance_params_["n_directions"]
+        if self.whole:
+            return [pack_for_metric(packed, self.code, n_directions)]
+        positions = range(self.final.n_diagrams_)
+        return [pack_for_metric(packed.only(k), self.code, n_directions) for k in positions]
 
     def fit(self, rows):
-        """Keep as many essential births per position as the validated ``rows`` hold at
-        most; returns ``self``."""
+        """Pack the validated fitted ``rows`` and keep as many essential births per
+        position as they hold at most; returns ``self``."""
         if self.diagrams:
+            self.packed = self._pack(rows)
             self.n_essential = np.zeros(self.final.n_diagrams_, dtype=np.int64)
             for sample in rows:
                 for k, diagram in enumerate(sample):
                     count = int(np.sum(~np.isfinite(diagram[:, 1])))
                     self.n_essential[k] = max(self.n_essential[k], count)
+        else:
+            self.features = rows
         return self
+
+    def exact(self, query, cols):
+        """The part's ``(len(query), len(cols))`` distances from validated query rows to
+        the fitted samples ``cols``, as its last step's ``transform`` computes them."""
+        final = self.final
+        if not self.diagrams:
+            return pairwise_distances(
+                query, self.features[cols], metric=final.metric, n_jobs=final.n_jobs
+            )
+        rows = np.repeat(np.arange(len(query)), len(cols))
+        cols = np.tile(np.asarray(cols, dtype=np.int64), len(query))
+        p = float(final.distance_params_["internal_p"])
+        n_parts = final.n_diagrams_ if self.whole else 1
+        matrices = [
+            pair_distances(left, right, rows, cols, n_parts, self.code, self.order, p).reshape(
+                len(query), -1
+            )
+            for left, right in zip(self._pack(query), self.packed, strict=True)
+        ]
+        if self.whole:
+            return matrices[0].astype(final.dtype, copy=False)
+        # DiagramDistance's combination of the positions divided by their scales.
+        scaled = [part / scale for part, scale in zip(matrices, self.scales, strict=True)]
+        metric = final.distance_params_["metric"]
+        if metric == "sliced-wasserstein":
+            total = sum(scaled)
+        elif np.isinf(self.q):
+            total = np.maximum.reduce(scaled)
+        else:
+            total = sum(part**self.order for part in scaled) ** (1.0 / self.order)
+        return total.astype(final.dtype, copy=False)
 
     def validate(self, rows):
         """Rows as the final step checks them (tuples of diagrams, or a float array)."""
