@@ -95,9 +95,13 @@ def test_other_folders_are_not_tu_datasets(tmp_path):
 BAD_FILES = [
     ({"graph_labels": None}, r"TINY_graph_labels.txt' \(or .gz\) does not exist"),
     ({"A": "1, 2\n2, x\n"}, r"TINY_A.txt': line 2 holds 'x', not an integer"),
-    ({"A": "1, 2\n\n2, 3, 1\n"}, r"TINY_A.txt': line 3 holds 3 values where 2 are expected"),
+    (
+        {"A": "1, 2\n\n2, 3, 1\n"},
+        r"TINY_A.txt': line 3 holds 3 comma-separated value\(s\) where 2",
+    ),
     ({"A": "1.0, 2.0\n"}, r"TINY_A.txt': line 1 holds '1.0', not an integer"),
-    ({"A": "1\n"}, r"TINY_A.txt': line 1 holds 1 values where 2 are expected"),
+    ({"A": "1, 2\n2 3\n"}, r"line 2 holds 1 comma-separated value\(s\) where 2"),
+    ({"A": "1\n"}, r"TINY_A.txt': line 1 holds 1 comma-separated value\(s\) where 2"),
     ({"A": "1, 2\n" * 3 + "7, 6\n"}, r"TINY_A.txt': line 4: node id 7 is outside 1..6"),
     ({"A": "0, 1\n"}, r"TINY_A.txt': line 1: node id 0 is outside 1..6"),
     ({"A": "99999999999999999999, 1\n"}, "line 1 holds 99999999999999999999, beyond 64-bit"),
@@ -112,7 +116,10 @@ BAD_FILES = [
     ({"node_labels": "0\n1\n"}, "node_labels.txt' holds 2 lines for 6 nodes"),
     ({"node_attributes": "1\n2\n3\n4\nnan\n6\n"}, "attributes.txt': line 5 holds a NaN"),
     ({"node_attributes": "1\n2\n3\n4\n5\nsix\n"}, "line 6 holds 'six', not a number"),
-    ({"node_attributes": "1, 2\n2\n3\n4\n5\n6\n"}, "line 2 holds 1 values where 2 are"),
+    (
+        {"node_attributes": "1, 2\n2\n3\n4\n5\n6\n"},
+        "line 2 holds 1 comma-separated value\\(s\\) where 2",
+    ),
 ]
 
 

@@ -83,7 +83,10 @@ def _bad_line(content: bytes, dtype, width: int | None) -> str:
             continue
         width = len(fields) if width is None else width
         if len(fields) != width:
-            return f"line {number} holds {len(fields)} values where {width} are expected"
+            return (
+                f"line {number} holds {len(fields)} comma-separated value(s) where {width} "
+                "are expected"
+            )
         for text in fields:
             try:
                 value = int(text) if dtype is np.int64 else float(text)

@@ -209,7 +209,8 @@ def _networkx_node_values(data: list[dict], place: str):
             column = np.array([d[key] for d in data], dtype=np.float64)
         except (ValueError, TypeError):
             raise TypeError(
-                f"{place}: node {key!r} values must be numbers (encode text labels first)"
+                f"{place}: node {key!r} values must be numbers, as many on every node "
+                "(encode text labels first)"
             ) from None
         columns.append(column.reshape(len(data), -1))
     return np.hstack(columns) if columns else None
