@@ -1,13 +1,15 @@
-"""The spectral stage: mesh Laplacians, their eigenpairs and the eigen transformer.
+"""The spectral stage: Laplacians of meshes, clouds and graphs, their eigenpairs and the
+eigen transformer.
 
-- :mod:`.laplacians`: ``cotangent_laplacian``, ``graph_laplacian`` and the registry
-  ``LAPLACIANS``;
-- :mod:`.eigensolver`: shift-invert Lanczos, sign rule, ``laplacian_eigenfunctions``;
+- :mod:`.laplacians`: ``cotangent_laplacian``, ``graph_laplacian`` and the registries
+  ``LAPLACIANS`` and ``GRAPH_LAPLACIANS`` (graph samples);
+- :mod:`.eigensolver`: shift-invert Lanczos, the dense path, sign rule,
+  ``laplacian_eigenfunctions``;
 - :mod:`.factorization`: the factorization backends (registry ``SOLVERS``) over
   :mod:`._cholesky` (our supernodal Cholesky) and SciPy's SuperLU, with the
   fill-reducing order of :mod:`._ordering`;
-- :mod:`.solve`: one sample's cleaning and eigensolve in the unit box, the unit of work
-  the cache stores;
+- :mod:`.solve`: one sample's cleaning and eigensolve in the unit box (a graph's: its
+  components), the unit of work the cache stores;
 - :mod:`.cache`: the eigen cache (data-only entries, checked on read);
 - :mod:`.signatures`: heat and wave kernel signatures of the eigenpairs (registry
   ``SIGNATURES``);
@@ -20,7 +22,7 @@
 from .cache import CacheWarning
 from .eigensolver import laplacian_eigenfunctions
 from .factorization import SOLVERS
-from .laplacians import LAPLACIANS, cotangent_laplacian, graph_laplacian
+from .laplacians import GRAPH_LAPLACIANS, LAPLACIANS, cotangent_laplacian, graph_laplacian
 from .multiplicity import RepeatedEigenvalueWarning
 from .quality import MeshQualityWarning
 from .shape_dna import ShapeDNA
@@ -29,6 +31,7 @@ from .transformer import ConstantEigenfunctionWarning, LaplacianEigenTransformer
 
 __all__ = [
     "CacheWarning",
+    "GRAPH_LAPLACIANS",
     "LAPLACIANS",
     "SIGNATURES",
     "SOLVERS",

@@ -10,6 +10,7 @@ from functools import partial
 from numbers import Integral
 
 import numpy as np
+import scipy.sparse as sp
 from sklearn.utils import check_random_state
 
 from .._base import SampleTransformer
@@ -20,7 +21,7 @@ from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.cleaning import describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
-from ..pointcloud.graph import knn_graph
+from ..pointcloud.graph import surface_graph
 from .cache import EigenCache, cache_of
 from .eigensolver import COMPONENTS
 from .factorization import SOLVERS
@@ -61,7 +62,7 @@ def _size_hint(mesh) -> int:
             return len(mesh)
         if isinstance(mesh, Graph):
             return mesh.n_nodes
-        if hasattr(mesh, "shape"):  # a sparse adjacency matrix
+        if sp.issparse(mesh):  # an adjacency matrix
             return mesh.shape[0]
         if isinstance(mesh, tuple | list) and isinstance(mesh[0], Integral):  # (n_nodes, edges)
             return int(mesh[0])
@@ -151,8 +152,9 @@ class LaplacianEigenTransformer(SampleTransformer):
     a canonical point order (a permuted cloud gives the permuted output, bit for bit).
     Coincident points are merged, as ``weld`` says (exact duplicates always), with the
     index maps of cleaning; a cloud in several clusters follows ``components``. The
-    field has no faces and the symmetric 10-nearest-neighbour graph as ``edges``: the
-    complex :class:`LowerStarPersistence` filters.
+    field has no faces and the edges of the operator's local triangles as ``edges``
+    (:func:`~sklearn_meshph.pointcloud.graph.surface_graph`): the complex
+    :class:`LowerStarPersistence` filters.
 
     Graphs (a :class:`~sklearn_meshph.graph.validation.Graph`, an ``(n_nodes, edges)``
     pair, a sparse adjacency matrix or a networkx graph; see :func:`check_graph`) take
@@ -520,9 +522,9 @@ class LaplacianEigenTransformer(SampleTransformer):
             values = values[:n_kept]
         identity = len(clean.vertices) == report.n_input_vertices
         if not graph and len(clean.faces) == 0:
-            # A cloud's complex is its kNN graph, built here from the kept points (cheap,
-            # and the same whether the solve came from the cache or not).
-            edges = knn_graph(clean.vertices)
+            # A cloud's complex is the edges of its local triangles, built here from the
+            # kept points (the same whether the solve came from the cache or not).
+            edges = surface_graph(clean.vertices)
         return ScalarField(
             vertices=clean.vertices,
             faces=clean.faces,
