@@ -8,6 +8,8 @@ import sys
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sklearn_meshph import Graph, check_graph
 from sklearn_meshph.inputs import check_input, sample_kind
@@ -123,6 +125,32 @@ def test_graphs_need_networkx_only_for_networkx_graphs():
         "assert check_graph(sp.csr_array([[0, 1], [1, 0]])).n_edges == 1"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n_nodes=st.integers(1, 12),
+    pairs=st.lists(st.tuples(st.integers(0, 11), st.integers(0, 11)), max_size=40),
+)
+def test_every_form_of_a_graph_gives_the_same_graph(n_nodes, pairs):
+    nx = pytest.importorskip("networkx")
+    edges = np.array([(i % n_nodes, j % n_nodes) for i, j in pairs], dtype=np.int64)
+    edges = edges.reshape(-1, 2)
+    expected = {(min(i, j), max(i, j)) for i, j in edges.tolist() if i != j}
+    from_pair = check_graph((n_nodes, edges))
+    assert from_pair.edges.tolist() == sorted(map(list, expected))
+    weights = 1.0 + np.arange(len(from_pair.edges))  # distinct weights follow their edges
+    matrix = _adjacency(from_pair.edges, weights, n_nodes).tocoo()
+    order = np.random.default_rng(n_nodes).permutation(matrix.nnz)  # any entry order
+    entries = (matrix.data[order], (matrix.row[order], matrix.col[order]))
+    shuffled = sp.coo_array(entries, shape=(n_nodes, n_nodes))
+    networkx_graph = nx.Graph()
+    networkx_graph.add_nodes_from(range(n_nodes)[::-1])  # inserted backwards, sorted back
+    networkx_graph.add_weighted_edges_from(
+        [(j, i, w) for (i, j), w in zip(from_pair.edges.tolist(), weights, strict=True)]
+    )
+    for graph in (check_graph(shuffled), check_graph(networkx_graph)):
+        _same(graph, from_pair.edges, weights, n_nodes=n_nodes)
 
 
 def test_a_graph_is_returned_as_is_and_checked_when_made():
