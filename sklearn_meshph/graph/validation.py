@@ -274,7 +274,7 @@ def _from_sparse(matrix, place: str) -> Graph:
     if matrix.dtype.kind not in "biuf":
         raise TypeError(f"{place}: adjacency entries must be real numbers, got {matrix.dtype}")
     coo = sp.coo_array(matrix, copy=True)  # a copy: the caller's matrix is left alone
-    coo.sum_duplicates()
+    coo.sum_duplicates()  # also sorts the entries by row, then column
     values = coo.data.astype(np.float64)
     if not np.isfinite(values).all():
         raise ValueError(f"{place}: the adjacency matrix has a NaN or infinite entry")
@@ -290,8 +290,7 @@ def _from_sparse(matrix, place: str) -> Graph:
     _asymmetry(rows, cols, values, n_nodes, place)
     upper = rows < cols
     edges = np.column_stack([rows[upper], cols[upper]])
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    return Graph(n_nodes, edges[order], values[upper][order])
+    return Graph(n_nodes, edges, values[upper])
 
 
 def check_graph(sample, *, index: int | None = None) -> Graph:
