@@ -166,8 +166,8 @@ def is_graph(sample) -> bool:
 
 def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: str) -> Graph:
     """The :class:`Graph` of edges in any order and direction: self-loops and edges of
-    weight 0 dropped, repeats (both directions too) made one. Repeats of one edge must
-    have equal weights."""
+    weight 0 dropped, repeats (both directions too) made one, of the first one's weight
+    (all ones for a pair; a networkx graph has no repeats)."""
     if len(edges) and (edges.min() < 0 or edges.max() >= n_nodes):
         row = int(np.flatnonzero(((edges < 0) | (edges >= n_nodes)).any(axis=1))[0])
         raise ValueError(
@@ -177,12 +177,9 @@ def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: st
     keep = (edges[:, 0] != edges[:, 1]) & (weights != 0)
     low = np.minimum(edges[keep, 0], edges[keep, 1])
     high = np.maximum(edges[keep, 0], edges[keep, 1])
-    keys, first, inverse = np.unique(low * n_nodes + high, return_index=True, return_inverse=True)
-    weights = weights[keep]
-    if not np.array_equal(weights, weights[first][inverse]):
-        raise ValueError(f"{place}: an edge is given twice with different weights")
+    keys, first = np.unique(low * n_nodes + high, return_index=True)
     pairs = np.column_stack([keys // n_nodes, keys % n_nodes])
-    return Graph(n_nodes, pairs, weights[first], node_values)
+    return Graph(n_nodes, pairs, weights[keep][first], node_values)
 
 
 def _weight(value, place: str) -> float:
@@ -242,13 +239,13 @@ def _from_networkx(graph, place: str) -> Graph:
 
 
 def _asymmetry(rows, cols, values, n: int, place: str) -> None:
-    """Refuse an adjacency whose upper and lower triangles differ; name one entry."""
+    """Refuse an adjacency whose upper and lower triangles differ; name one entry. The
+    entries come in row order, so the upper triangle's keys are sorted."""
     upper, lower = rows < cols, rows > cols
-    up_keys = rows[upper] * n + cols[upper]
+    up_keys, up_values = rows[upper] * n + cols[upper], values[upper]
     low_keys = cols[lower] * n + rows[lower]
-    up_order, low_order = np.argsort(up_keys), np.argsort(low_keys)
-    up_keys, low_keys = up_keys[up_order], low_keys[low_order]
-    up_values, low_values = values[upper][up_order], values[lower][low_order]
+    low_order = np.argsort(low_keys, kind="stable")
+    low_keys, low_values = low_keys[low_order], values[lower][low_order]
     if len(up_keys) == len(low_keys) and np.array_equal(up_keys, low_keys):
         close = np.abs(up_values - low_values) <= _SYMMETRY_RTOL * np.maximum(up_values, low_values)
         if close.all():
