@@ -4,11 +4,10 @@ Each entry computes the diagrams of one function from the mesh's edge adjacency 
 once per mesh) and names them. A new filtration is a function
 ``(adjacency, values, essential, surface, wanted) -> list of (n, 2) arrays``, the names
 and short ids of its diagrams and one :class:`Filtration` entry in :data:`FILTRATIONS`.
-``surface`` is the cycle structure of the sample, built once per sample when a
-diagram that needs it is wanted: a closed surface's edges
-(:func:`.extended.closed_surface`), a graph's :class:`.graph_extended.GraphCycles`, or
-None. ``wanted`` holds the indices of the diagrams the caller keeps: a filtration may
-skip the work of the others and return them empty.
+``surface`` is a closed surface's edge structure (:func:`.extended.closed_surface`),
+built once per mesh when a diagram that needs it is wanted, or None. ``wanted`` holds
+the indices of the diagrams the caller keeps: a filtration may skip the work of the
+others and return them empty.
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ import numpy as np
 from .._registry import Option, Registry
 from ..mesh.graph import connected_components
 from .extended import essential_h1_pairs
-from .graph_extended import GraphCycles, graph_diagrams
 from .lower_star import sublevel_h0
 
 __all__ = ["ESSENTIAL_POLICIES", "FILTRATIONS", "Filtration", "function_diagrams"]
@@ -36,9 +34,9 @@ class Filtration:
 
     ``surface_diagrams``: the indices of the diagrams that ``compute`` makes from the
     closed-surface edge structure (built once per mesh when one of them is wanted, None
-    on a mesh that is not a closed surface) or from a graph's cycles. ``from_graph``:
-    on a graph sample ``compute`` reads only the :class:`.graph_extended.GraphCycles`
-    passed as ``surface`` (the adjacency is then None).
+    on a mesh that is not a closed surface). ``from_graph``: the diagrams of a graph
+    sample are those of :func:`.graph_extended.batch_diagrams` (the whole of its
+    extended persistence, for many graphs at once), not ``compute``'s.
     """
 
     compute: Callable
@@ -104,11 +102,6 @@ def _symmetric(adjacency, values, essential, surface, wanted):
 
 
 def _extended(adjacency, values, essential, surface, wanted):
-    if isinstance(surface, GraphCycles):
-        # All four in one compiled call; relative H1 (max, saddle) and the cycles
-        # (birth above death) in the library's orientation, lower value first.
-        ord0, rel1, ext0, ext1 = graph_diagrams(surface, values)
-        return [ord0, rel1[:, ::-1], ext0, ext1[:, ::-1]]
     sub = sup = extremes = ext1 = np.empty((0, 2))
     if 0 in wanted or 2 in wanted:
         sub, _, roots = sublevel_h0(adjacency, values)
@@ -167,9 +160,8 @@ def function_diagrams(
 ):
     """The diagrams of one function, as a list of (n, 2) arrays (see LowerStarPersistence).
 
-    ``surface`` (from :func:`.extended.closed_surface` or
-    :func:`.graph_extended.graph_cycles`, built once per sample) enables the essential
-    H1 diagram of ``"extended"``; without it that diagram is empty. ``wanted``
+    ``surface`` (from :func:`.extended.closed_surface`, built once per mesh) enables the
+    essential H1 diagram of ``"extended"``; without it that diagram is empty. ``wanted``
     (indices; ``None``: all) are the diagrams the caller keeps, the others may be empty.
     """
     entry = FILTRATIONS[filtration].value

@@ -41,8 +41,8 @@ from .lower_star import elder_merge
 __all__ = [
     "GRAPH_DIAGRAMS",
     "GraphCycles",
+    "batch_diagrams",
     "extended_persistence",
-    "graph_cycles",
     "graph_diagrams",
 ]
 
@@ -51,39 +51,38 @@ GRAPH_DIAGRAMS = ("ord0", "rel1", "ext0", "ext1")
 
 
 class GraphCycles(NamedTuple):
-    """A graph sample as the extended filtration reads it: its node count and its
-    edges, each once as ``i < j`` (no self-loops), from :func:`graph_cycles`."""
+    """A graph sample as the extended filtration reads it: its node count and its edges
+    (in range; repeats and self-loops are left out by the compiled code)."""
 
     n_nodes: int
     edges: np.ndarray
 
 
 @numba.njit(cache=True)
-def _simple(n_nodes, edges):
-    """Whether the rows of ``edges`` are in range (else -1), and whether each is
-    ``i < j`` with the rows strictly increasing (1; 0 if not)."""
-    simple = 1
+def _simple_edges(n_nodes, edges):
+    """``edges`` as a simple graph, a new array: each edge once as ``i < j`` in sorted
+    rows, self-loops dropped (a loop is no cycle of the lower-star filtration, a
+    repeated edge the same simplex). Already simple rows are only copied."""
+    simple = True
     for e in range(len(edges)):
         a, b = edges[e, 0], edges[e, 1]
-        if a < 0 or b < 0 or a >= n_nodes or b >= n_nodes:
-            return -1
-        if a >= b or (e and (edges[e - 1, 0], edges[e - 1, 1]) >= (a, b)):
-            simple = 0
-    return simple
-
-
-def graph_cycles(n_nodes: int, edges: np.ndarray) -> GraphCycles:
-    """``edges`` (int64 ``(m, 2)``) of a graph on ``n_nodes`` nodes as a
-    :class:`GraphCycles`: self-loops dropped (a loop is no cycle of the lower-star
-    filtration), each edge once (a repeated edge is the same simplex)."""
-    edges = np.ascontiguousarray(edges, dtype=np.int64).reshape(-1, 2)
-    status = _simple(n_nodes, edges)
-    if status < 0:
-        raise ValueError(f"edges must be node indices in range({n_nodes})")
-    if status == 0:
-        edges = np.sort(edges[edges[:, 0] != edges[:, 1]], axis=1)
-        edges = np.unique(edges, axis=0) if len(edges) else edges
-    return GraphCycles(int(n_nodes), edges)
+        if a >= b or (e and edges[e - 1, 0] * n_nodes + edges[e - 1, 1] >= a * n_nodes + b):
+            simple = False
+            break
+    if simple:
+        return edges.copy()
+    keys = np.empty(len(edges), dtype=np.int64)
+    count = 0
+    for e in range(len(edges)):
+        a, b = min(edges[e, 0], edges[e, 1]), max(edges[e, 0], edges[e, 1])
+        if a != b:
+            keys[count] = a * n_nodes + b
+            count += 1
+    keys = np.unique(keys[:count])
+    out = np.empty((len(keys), 2), dtype=np.int64)
+    out[:, 0] = keys // n_nodes
+    out[:, 1] = keys % n_nodes
+    return out
 
 
 @numba.njit(cache=True)
@@ -219,6 +218,7 @@ def _kept(births, deaths, min_persistence):
 @numba.njit(cache=True)
 def _graph_diagrams(n_nodes, edges, values, min_persistence):
     """The four diagrams of one function, gudhi's orientation (see the module)."""
+    edges = _simple_edges(n_nodes, edges)
     order = np.argsort(values, kind="mergesort")
     indptr, incident = _incidence(n_nodes, edges)
     up_births, up_deaths, up_parent, _, up_positive = _sweep(order, indptr, incident, edges)
@@ -245,11 +245,89 @@ def _graph_diagrams(n_nodes, edges, values, min_persistence):
     return ord0, rel1, ext0, ext1
 
 
+@numba.njit(cache=True)
+def _batch(job_nodes, job_edges, job_values, edges, values, min_persistence, lower_first):
+    """:func:`_graph_diagrams` of every job ``j``: the graph of ``job_nodes[j]`` nodes and
+    the edges ``edges[job_edges[j, 0]:job_edges[j, 1]]``, the function
+    ``values[job_values[j]:job_values[j] + job_nodes[j]]``. Returns the four diagrams of
+    all jobs packed one after the other (``lower_first``: the columns of ``rel1`` and
+    ``ext1`` swapped), and the number of rows of each ``(jobs, 4)``."""
+    n_total = job_nodes.sum()
+    m_total = (job_edges[:, 1] - job_edges[:, 0]).sum()
+    packed = (
+        np.empty((n_total, 2)),
+        np.empty((n_total, 2)),
+        np.empty((n_total, 2)),
+        np.empty((m_total, 2)),
+    )
+    counts = np.zeros((len(job_nodes), 4), dtype=np.int64)
+    fill = np.zeros(4, dtype=np.int64)
+    for j in range(len(job_nodes)):
+        n = job_nodes[j]
+        start = job_values[j]
+        diagrams = _graph_diagrams(
+            n, edges[job_edges[j, 0] : job_edges[j, 1]], values[start : start + n], min_persistence
+        )
+        for k in range(4):
+            rows = diagrams[k]
+            swap = lower_first and k % 2 == 1
+            for i in range(len(rows)):
+                packed[k][fill[k] + i, 0] = rows[i, 1] if swap else rows[i, 0]
+                packed[k][fill[k] + i, 1] = rows[i, 0] if swap else rows[i, 1]
+            fill[k] += len(rows)
+            counts[j, k] = len(rows)
+    return packed, counts
+
+
 def graph_diagrams(graph: GraphCycles, values: np.ndarray, min_persistence: float = 0.0):
     """``(ord0, rel1, ext0, ext1)`` of one function on a graph, gudhi's orientation (see
     :func:`extended_persistence`); ``values`` finite float64 ``(n_nodes,)``,
     contiguous."""
     return _graph_diagrams(graph.n_nodes, graph.edges, values, float(min_persistence))
+
+
+def batch_diagrams(
+    samples, min_persistence: float = 0.0, lower_first: bool = False
+) -> list[list[tuple]]:
+    """:func:`graph_diagrams` of many functions on many graphs in one compiled call.
+
+    ``samples``: ``(graph, values)`` pairs, ``graph`` a :class:`GraphCycles` and
+    ``values`` finite of shape ``(n_nodes,)`` or ``(n_nodes, k)``. Returns, per sample,
+    the list over its functions of ``(ord0, rel1, ext0, ext1)`` (views into packed
+    arrays); ``lower_first``: ``rel1`` and ``ext1`` as ``(death, birth)``, the library's
+    orientation.
+    """
+    if not samples:
+        return []
+    nodes, edge_bounds, columns = [], [], []
+    edge_start = 0
+    for graph, values in samples:
+        n_functions = 1 if values.ndim == 1 else values.shape[1]
+        nodes += [graph.n_nodes] * n_functions
+        edge_bounds += [(edge_start, edge_start + len(graph.edges))] * n_functions
+        edge_start += len(graph.edges)
+        columns.append(values.T.ravel())
+    job_nodes = np.asarray(nodes, dtype=np.int64)
+    job_values = np.concatenate([[0], np.cumsum(job_nodes)[:-1]])
+    edges = np.concatenate([graph.edges for graph, _ in samples]).astype(np.int64, copy=False)
+    packed, counts = _batch(
+        job_nodes,
+        np.asarray(edge_bounds, dtype=np.int64).reshape(-1, 2),
+        job_values,
+        np.ascontiguousarray(edges.reshape(-1, 2)),
+        np.concatenate(columns),
+        float(min_persistence),
+        bool(lower_first),
+    )
+    bounds = np.cumsum(counts, axis=0)
+    parts = [np.split(packed[k][: bounds[-1, k]], bounds[:-1, k]) for k in range(4)]
+    per_job = list(zip(*parts, strict=True))
+    out, job = [], 0
+    for _, values in samples:
+        n_functions = 1 if values.ndim == 1 else values.shape[1]
+        out.append(per_job[job : job + n_functions])
+        job += n_functions
+    return out
 
 
 @validate_params({"min_persistence": [Interval(Real, 0, None, closed="left")]})
@@ -329,6 +407,6 @@ def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np
     values = check_values(values, graph.n_nodes, where(None))
     if values.ndim != 1:
         raise ValueError(f"values must have shape ({graph.n_nodes},), got {values.shape}")
-    cycles = graph_cycles(graph.n_nodes, graph.edges)
+    cycles = GraphCycles(graph.n_nodes, graph.edges)
     diagrams = graph_diagrams(cycles, np.ascontiguousarray(values), min_persistence)
     return dict(zip(GRAPH_DIAGRAMS, diagrams, strict=True))

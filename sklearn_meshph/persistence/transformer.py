@@ -10,16 +10,16 @@ import numpy as np
 
 from .._base import SampleTransformer
 from .._param_validation import Interval, Options
-from .._progress import map_samples
+from .._progress import map_samples, sample_blocks
 from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import mesh_edges
 from ..mesh.scalar_field import ScalarField
 from ..mesh.validation import check_values, where
-from ..pointcloud.graph import edge_adjacency, knn_graph
+from ..pointcloud.graph import edge_adjacency, surface_graph
 from .extended import closed_surface
 from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
-from .graph_extended import graph_cycles
+from .graph_extended import GraphCycles, batch_diagrams
 
 __all__ = ["LowerStarPersistence"]
 
@@ -27,8 +27,8 @@ __all__ = ["LowerStarPersistence"]
 def _sample_arrays(sample, index):
     """Faces, extra edges, vertex count and values of a sample, validated once, and
     whether it is a graph: a ScalarField was validated when it was made, a ``(mesh,
-    values)`` pair is validated here (a point cloud gets its kNN graph as edges, a graph
-    its own edges)."""
+    values)`` pair is validated here (a point cloud gets the edges of its local
+    triangles, a graph its own edges)."""
     if isinstance(sample, ScalarField):
         return sample.faces, sample.edges, sample.n_vertices, sample.values, sample.is_graph
     if isinstance(sample, tuple | list) and len(sample) == 2:
@@ -39,7 +39,7 @@ def _sample_arrays(sample, index):
             return np.empty((0, 3), dtype=np.int64), first.edges, first.n_nodes, values, True
         values = check_values(values, len(first), where(index))
         if faces is None:
-            return np.empty((0, 3), dtype=np.int64), knn_graph(first), len(first), values, False
+            return np.empty((0, 3), dtype=np.int64), surface_graph(first), len(first), values, False
         return faces, None, len(first), values, False
     raise TypeError(
         f"sample {index}: expected a ScalarField or a (mesh, values) pair, "
@@ -57,29 +57,34 @@ def _complex_adjacency(faces, edges, n_vertices):
     return edge_adjacency(edges, n_vertices)
 
 
-def _complex(sample, index, entry, keep):
-    """Values, adjacency and cycle structure (``surface`` of :func:`function_diagrams`)
-    of a sample. Essential H1 comes from a closed surface of triangles or a graph's
-    cycles: a point cloud has none (its kNN graph's cycles are artefacts of the
-    neighbourhood size)."""
-    faces, edges, n_vertices, values, is_graph = _sample_arrays(sample, index)
+def _graph_edges(edges):
+    return np.empty((0, 2), dtype=np.int64) if edges is None else edges
+
+
+def _complex(arrays, entry, keep):
+    """Adjacency and closed surface (``surface`` of :func:`function_diagrams`) of a
+    sample's arrays. Essential H1 of a mesh needs a closed surface of triangles; a point
+    cloud has none (its kNN graph's cycles are artefacts of the neighbourhood size), a
+    graph's cycles go through :func:`.graph_extended.batch_diagrams`."""
+    faces, edges, n_vertices, _, is_graph = arrays
     if is_graph:
-        cycles = graph_cycles(n_vertices, np.empty((0, 2)) if edges is None else edges)
-        if entry.from_graph:
-            return values, None, cycles
-        return values, edge_adjacency(cycles.edges, n_vertices), cycles
+        return edge_adjacency(_graph_edges(edges), n_vertices), None
     adjacency = _complex_adjacency(faces, edges, n_vertices)
     needs_surface = set(entry.surface_diagrams) & set(keep)
     surface = closed_surface(faces, adjacency) if needs_surface and edges is None else None
-    return values, adjacency, surface
+    return adjacency, surface
 
 
-def _diagrams_one(item, *, filtration, essential, min_persistence, keep):
-    index, sample = item
-    values, adjacency, surface = _complex(sample, index, FILTRATIONS[filtration].value, keep)
-    diagrams = []
-    for column in ScalarField.columns_of(values):
-        per_function = function_diagrams(
+def _per_sample(per_function, keep):
+    """One sample's output from the diagrams of each of its functions."""
+    diagrams = [diagram[k] for diagram in per_function for k in keep]
+    return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
+
+
+def _diagrams_of(arrays, *, filtration, essential, min_persistence, keep):
+    adjacency, surface = _complex(arrays, FILTRATIONS[filtration].value, keep)
+    per_function = [
+        function_diagrams(
             adjacency,
             np.ascontiguousarray(column),
             filtration=filtration,
@@ -88,8 +93,35 @@ def _diagrams_one(item, *, filtration, essential, min_persistence, keep):
             surface=surface,
             wanted=keep,
         )
-        diagrams.extend(per_function[k] for k in keep)
-    return diagrams[0] if len(diagrams) == 1 else tuple(diagrams)
+        for column in ScalarField.columns_of(arrays[3])
+    ]
+    return _per_sample(per_function, keep)
+
+
+def _diagrams_one(item, **options):
+    index, sample = item
+    return _diagrams_of(_sample_arrays(sample, index), **options)
+
+
+def _diagrams_block(block, **options):
+    """The diagrams of a block ``(start, samples)``: those of graphs, under a filtration
+    computed from the graph alone (``"extended"``), in one compiled call; the others
+    one by one."""
+    start, samples = block
+    out, graphs, positions = [], [], []
+    for index, sample in enumerate(samples, start):
+        arrays = _sample_arrays(sample, index)
+        _, edges, n_vertices, values, is_graph = arrays
+        if is_graph:
+            graphs.append((GraphCycles(n_vertices, _graph_edges(edges)), values))
+            positions.append(len(out))
+            out.append(None)
+        else:
+            out.append(_diagrams_of(arrays, **options))
+    batch = batch_diagrams(graphs, options["min_persistence"], lower_first=True)
+    for position, per_function in zip(positions, batch, strict=True):
+        out[position] = _per_sample(per_function, options["keep"])
+    return out
 
 
 class LowerStarPersistence(SampleTransformer):
@@ -100,10 +132,11 @@ class LowerStarPersistence(SampleTransformer):
     in float64 by union-find over the vertices in value order (elder rule, ties broken by
     vertex index), the edge adjacency built once per mesh and shared by its functions.
     On a point cloud (a field without faces, or a ``(points, values)`` pair) the complex
-    is its symmetric k-nearest-neighbour graph (``ScalarField.edges``): every H0
-    diagram is computed on it exactly as on a mesh's edges, and the essential H1
-    diagram of ``"extended"`` is empty (that graph's cycles come from the neighbourhood
-    size, not from the surface). On a graph (a field with ``is_graph``, or a ``(graph,
+    is the edges of the local triangles its operator is made of (``ScalarField.edges``,
+    :func:`~sklearn_meshph.pointcloud.graph.surface_graph`): every H0 diagram is
+    computed on it exactly as on a mesh's edges, and the essential H1 diagram of
+    ``"extended"`` is empty (that graph's cycles come from the sampling, not from the
+    surface). On a graph (a field with ``is_graph``, or a ``(graph,
     values)`` pair) the complex is the graph's nodes and edges, and ``"extended"``
     gives all of its extended persistence, the cycles included (see Notes).
 
@@ -266,17 +299,22 @@ class LowerStarPersistence(SampleTransformer):
         """
         self._check_params()
         samples = self._check_samples(X)
-        keep = self._keep()
-        work = partial(
-            _diagrams_one,
-            filtration=self.filtration,
-            essential=self.essential,
-            min_persistence=float(self.min_persistence),
-            keep=keep,
+        options = {
+            "filtration": self.filtration,
+            "essential": self.essential,
+            "min_persistence": float(self.min_persistence),
+            "keep": self._keep(),
+        }
+        run = partial(map_samples, n_jobs=self.n_jobs, desc="persistence", verbose=self.verbose)
+        if not FILTRATIONS[self.filtration].value.from_graph:
+            return run(partial(_diagrams_one, **options), enumerate(samples))
+        # Graphs are small and many: blocks of samples, each graph's functions in one
+        # compiled call with the others of its block.
+        blocks = run(
+            partial(_diagrams_block, **options),
+            [(a, samples[a:b]) for a, b in sample_blocks(len(samples), self.n_jobs)],
         )
-        return map_samples(
-            work, enumerate(samples), n_jobs=self.n_jobs, desc="persistence", verbose=self.verbose
-        )
+        return [diagrams for block in blocks for diagrams in block]
 
     def diagram_names(self, n_functions: int = 1) -> list[str]:
         """Names of the diagrams of one sample, in output order.
