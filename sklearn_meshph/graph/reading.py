@@ -74,9 +74,14 @@ def _content(path: str, place: str) -> bytes:
         return stream.read()
 
 
+def _line_number(content: bytes, row: int) -> int:
+    """The line number (1-based) of table row ``row`` (blank lines hold no row)."""
+    filled = np.flatnonzero([bool(line.strip()) for line in content.splitlines()])
+    return int(filled[row]) + 1
+
+
 def _bad_line(content: bytes, dtype, width: int | None) -> str:
     """Where and why ``content`` is not a table of ``dtype`` (the error path only)."""
-    number = 0
     for number, line in enumerate(content.splitlines(), start=1):
         fields = [f.strip() for f in line.decode("latin-1").split(",")]
         if fields == [""]:
@@ -95,7 +100,7 @@ def _bad_line(content: bytes, dtype, width: int | None) -> str:
                 return f"line {number} holds {text[:40]!r}, not {kind}"
             if dtype is np.int64 and not _INT64.min <= value <= _INT64.max:
                 return f"line {number} holds {value}, beyond 64-bit integers"
-    return f"line {number} cannot be read"
+    return "its lines are not plain numbers"
 
 
 def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
@@ -116,13 +121,16 @@ def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
         reason = _bad_line(content, dtype, width)
         raise ValueError(f"{place}: cannot read TU file {path!r}: {reason}")
     if dtype is np.float64 and not np.isfinite(table).all():
-        line = int(np.flatnonzero(~np.isfinite(table).all(axis=1))[0]) + 1
+        line = _line_number(content, int(np.flatnonzero(~np.isfinite(table).all(axis=1))[0]))
         raise ValueError(f"{place}: TU file {path!r}: line {line} holds a NaN or infinity")
     return table
 
 
 def _row_error(place: str, path: str, row: int, problem: str):
-    return ValueError(f"{place}: TU file {path!r}: line {row + 1}: {problem}")
+    """The error of table row ``row`` of a file, naming its line (the file is read again:
+    the error path only)."""
+    line = _line_number(_content(path, place), row)
+    return ValueError(f"{place}: TU file {path!r}: line {line}: {problem}")
 
 
 def _graph_ids(path: str, place: str) -> np.ndarray:
