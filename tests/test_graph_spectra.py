@@ -17,6 +17,7 @@ from sklearn_meshph.mesh.graph import mesh_edges
 from sklearn_meshph.spectral import eigensolver
 from sklearn_meshph.spectral.eigensolver import DENSE_MAX_NODES, generalized_eigenpairs
 from sklearn_meshph.spectral.laplacians import GRAPH_LAPLACIANS, LAPLACIANS
+from sklearn_meshph.spectral.multiplicity import RepeatedEigenvalueWarning
 from sklearn_meshph.spectral.signatures import check_times
 
 GRAPH_KINDS = ("graph", "normalized", "random_walk")
@@ -427,3 +428,15 @@ def test_times_parameter_clones_and_pickles():
     eigen = LaplacianEigenTransformer(signature="hks", times=(0.1, 10))
     assert clone(eigen).get_params()["times"] == (0.1, 10)
     assert pickle.loads(pickle.dumps(eigen)).times == (0.1, 10)
+
+
+def test_eigenfunctions_of_a_zero_eigenvalue_say_it_is_one_per_component():
+    graph = make_graph(7, [(0, 1), (1, 2), (3, 4), (4, 5)])  # two paths, an isolated node
+    with pytest.warns(
+        RepeatedEigenvalueWarning,
+        match="sample 0: eigenvalue 1 is 0, as are eigenvalues 0-2: the sample has 3 connected",
+    ):
+        (field,) = LaplacianEigenTransformer(
+            laplacian="graph", components="all", eigen_index=1
+        ).fit_transform([graph])
+    np.testing.assert_allclose(field.eigenvalues, 0.0, atol=1e-12)

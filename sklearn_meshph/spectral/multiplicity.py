@@ -11,6 +11,9 @@ __all__ = ["RepeatedEigenvalueWarning", "solve_covering", "warn_if_repeated"]
 
 # Eigenvalues closer than this (relative) count as one repeated eigenvalue.
 _REPEATED_RTOL = 1e-3
+# Eigenvalues below this share of the largest computed one are zeros: one per connected
+# component of a graph kept whole (components="all").
+_ZERO_RTOL = 1e-9
 # A repeated eigenvalue that reaches the end of a solve makes it grow by at most this
 # many blocks of eigenpairs, so that the warning can state the whole multiplicity:
 # beyond it (a "book" of many triangles on one edge) the warning says "at least".
@@ -22,8 +25,10 @@ class RepeatedEigenvalueWarning(UserWarning):
 
 
 def _repeats(values: np.ndarray, i: int) -> np.ndarray:
-    """Indices of the eigenvalues that coincide with ``values[i]``."""
-    return np.flatnonzero(np.abs(values - values[i]) <= _REPEATED_RTOL * abs(values[i]))
+    """Indices of the eigenvalues that coincide with ``values[i]``: within a relative
+    ``_REPEATED_RTOL``, or both zero (below ``_ZERO_RTOL`` times the largest)."""
+    tolerance = max(_REPEATED_RTOL * abs(values[i]), _ZERO_RTOL * np.abs(values).max())
+    return np.flatnonzero(np.abs(values - values[i]) <= tolerance)
 
 
 def _reaches_end(values: np.ndarray, indices) -> bool:
@@ -57,13 +62,24 @@ def warn_if_repeated(values: np.ndarray, indices, sample: int, complete: bool) -
             continue
         open_ended = not complete and close[-1] == len(values) - 1
         lam = values[i]
+        at_least = "at least " if open_ended else ""
+        if close[0] == 0:  # zero, as the constant's: one per connected component
+            warnings.warn(
+                f"sample {sample}: eigenvalue {i} is 0, as are eigenvalues {close[0]}-"
+                f"{close[-1]}: the sample has {at_least}{len(close)} connected components "
+                "(components='all'), and its eigenfunction is an arbitrary combination of "
+                "their indicator functions",
+                RepeatedEigenvalueWarning,
+                stacklevel=5,
+            )
+            continue
         others = np.delete(values, close)
         with np.errstate(divide="ignore", invalid="ignore"):  # lam = 0: a broken operator
             gap = np.min(np.abs(others - lam)) / abs(lam) if len(others) else np.inf
             spread = (values[close].max() - values[close].min()) / abs(lam)
         warnings.warn(
             f"sample {sample}: eigenvalue {i} ({lam:.6g}) is repeated with multiplicity "
-            f"{'at least ' if open_ended else ''}{len(close)} (eigenvalues {close[0]}-"
+            f"{at_least}{len(close)} (eigenvalues {close[0]}-"
             f"{close[-1]} agree within a relative {spread:.1e}; relative gap to the next "
             f"distinct one {gap:.2g}); its eigenfunction is not unique",
             RepeatedEigenvalueWarning,
