@@ -130,13 +130,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m sklearn_meshph",
         description=(
-            "Classify triangle meshes or point clouds by persistent homology of Laplacian "
-            "eigenfunctions and spectral signatures: a pipeline of the library "
-            "(--preset) gives the distances between samples, a k-NN classifier is scored "
-            "by stratified cross-validation, each fold's model fitted on its training "
-            "samples only. Prints accuracy, a confusion matrix and the time per stage, "
-            "writes the distances, predictions and a summary, and a t-SNE embedding and "
-            "the functions of some samples as PNGs."
+            "Classify triangle meshes, point clouds or graphs (a TU dataset folder) by "
+            "persistent homology of Laplacian eigenfunctions and spectral signatures: a "
+            "pipeline of the library (--preset) gives the distances between samples, a "
+            "k-NN classifier is scored by stratified cross-validation, each fold's model "
+            "fitted on its training samples only. Prints accuracy, a confusion matrix and "
+            "the time per stage, writes the distances, predictions and a summary, and a "
+            "t-SNE embedding and the functions of some samples as PNGs."
         ),
         epilog=_EPILOG,
         formatter_class=_HelpFormatter,
