@@ -440,3 +440,16 @@ def test_eigenfunctions_of_a_zero_eigenvalue_say_it_is_one_per_component():
             laplacian="graph", components="all", eigen_index=1
         ).fit_transform([graph])
     np.testing.assert_allclose(field.eigenvalues, 0.0, atol=1e-12)
+
+
+def test_weights_beyond_float64s_range_are_refused():
+    huge = make_graph(3, [(0, 1), (0, 2)], [1e308, 1e308])
+    for kind in GRAPH_KINDS:
+        with pytest.raises(ValueError, match="sample 0: the graph's edge weights sum beyond"):
+            LaplacianEigenTransformer(laplacian=kind, eigen_index=1).fit_transform([huge])
+    # Tiny weights are a scale like any other: the normalized spectrum does not see it.
+    tiny = make_graph(3, [(0, 1), (0, 2)], [1e-300, 1e-300])
+    np.testing.assert_allclose(spectrum(tiny, "normalized"), [0, 1, 2], atol=1e-12)
+    np.testing.assert_allclose(
+        spectrum(tiny, "graph"), [0, 1e-300, 3e-300], rtol=1e-12, atol=1e-310
+    )
