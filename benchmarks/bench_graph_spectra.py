@@ -10,8 +10,9 @@ the time of one graph's ``k`` lowest eigenpairs by the dense path (LAPACK ``evr`
 subset of eigenpairs), by the sparse path (our Cholesky and ARPACK, as
 ``generalized_eigenpairs`` runs it), and of *every* eigenpair by the dense path
 (``evd``, PersLay's setting). The best of ``--repeats`` is kept, BLAS on one thread
-(as the eigen stage runs). The crossover is the size from which the sparse path is the
-faster for both kinds.
+(as the eigen stage runs). ``DENSE_MAX_NODES`` (``sklearn_meshph/spectral/eigensolver.py``)
+is the largest size measured at which the dense path is the faster on both kinds for the
+eigen stage's block of 8 eigenpairs; results in ``docs/eigenfunctions.md``.
 
 Part 2, the TU datasets of ``SKLEARN_MESHPH_DATA/tu`` (parsed here in a few lines):
 time per graph of every eigenpair (dense), and of ``k`` eigenpairs by ``solver="auto"``

@@ -391,13 +391,14 @@ class LaplacianEigenTransformer(SampleTransformer):
             )
 
     def transform(self, X):
-        """Compute the eigenfunction(s) of every mesh.
+        """Compute the eigenfunction(s) or signature of every sample.
 
         Parameters
         ----------
-        X : sequence of meshes or point clouds
-            Each a trimesh.Trimesh, a (vertices, faces) pair, a path, an (n, 3) array
-            or a trimesh.PointCloud.
+        X : sequence of meshes, point clouds or graphs
+            Each a trimesh.Trimesh, a (vertices, faces) pair, a path, an (n, 3) array,
+            a trimesh.PointCloud, or a graph (a Graph, an (n_nodes, edges) pair, a
+            sparse adjacency matrix or a networkx graph).
 
         Returns
         -------
@@ -409,12 +410,14 @@ class LaplacianEigenTransformer(SampleTransformer):
             the input's vertices and back; ``cleaning`` reports what was dropped.
             ``spectrum`` holds the first ``n_eigenpairs`` eigenvalues and
             ``column_names`` what each column is (``"eigenfunction 1"``, ``"heat kernel
-            signature t=..."``).
+            signature t=..."``). A graph's field has ``vertices`` of shape
+            ``(n_kept_nodes, 0)``, no faces and the kept graph's edges as ``edges``.
 
         Warns
         -----
         MeshCleaningWarning
-            When cleaning drops more than 1% of a mesh's vertices or area.
+            When cleaning drops more than 1% of a mesh's vertices or area (of a graph's
+            nodes or edge weight, with ``components="largest"``).
         RepeatedEigenvalueWarning
             When a requested eigenvalue is repeated.
         ConstantEigenfunctionWarning
