@@ -4,11 +4,11 @@ eigenfunctions, as scikit-learn estimators.
 One sub-package per stage over a shared mesh layer (see ``docs/architecture.md``):
 :mod:`.mesh` (input, validation, cleaning, ``ScalarField``), :mod:`.pointcloud` (point
 clouds as input: validation, files, their Laplacian and neighbourhood graph),
-:mod:`.spectral` (Laplacians,
-eigensolver, ``LaplacianEigenTransformer``), :mod:`.persistence` (lower-star and extended
-persistence, ``LowerStarPersistence``) and :mod:`.diagrams` (distances,
-``DiagramDistance``, converters); :mod:`.datasets`, :mod:`.plotting` and :mod:`.cli`
-beside them.
+:mod:`.graph` (graphs as input: ``Graph``, ``check_graph``, TU datasets),
+:mod:`.spectral` (Laplacians, eigensolver, ``LaplacianEigenTransformer``),
+:mod:`.persistence` (lower-star and extended persistence, ``LowerStarPersistence``) and
+:mod:`.diagrams` (distances, ``DiagramDistance``, converters); :mod:`.datasets`,
+:mod:`.plotting` and :mod:`.cli` beside them.
 """
 
 from . import vectorization
