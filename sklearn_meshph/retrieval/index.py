@@ -91,6 +91,15 @@ class _ShapeIndex(BaseEstimator):
         "random_state": ["random_state"],
     }
 
+    def __init__(
+        self, distance=None, n_neighbors=5, scale_samples=1000, block_size=64, random_state=0
+    ):
+        self.distance = distance
+        self.n_neighbors = n_neighbors
+        self.scale_samples = scale_samples
+        self.block_size = block_size
+        self.random_state = random_state
+
     def _fit_index(self, X):
         check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
         distance = make_mesh_distance() if self.distance is None else clone(self.distance)
@@ -374,15 +383,6 @@ class ShapeNeighbors(_ShapeIndex):
     (array([[0.5]]), array([[0]]))
     """
 
-    def __init__(
-        self, distance=None, n_neighbors=5, scale_samples=1000, block_size=64, random_state=0
-    ):
-        self.distance = distance
-        self.n_neighbors = n_neighbors
-        self.scale_samples = scale_samples
-        self.block_size = block_size
-        self.random_state = random_state
-
     def fit(self, X, y=None):
         """Learn the scales of ``distance`` and store the rows of every part.
 
@@ -430,11 +430,13 @@ class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
     def __init__(
         self, distance=None, n_neighbors=1, scale_samples=1000, block_size=64, random_state=0
     ):
-        self.distance = distance
-        self.n_neighbors = n_neighbors
-        self.scale_samples = scale_samples
-        self.block_size = block_size
-        self.random_state = random_state
+        super().__init__(
+            distance=distance,
+            n_neighbors=n_neighbors,
+            scale_samples=scale_samples,
+            block_size=block_size,
+            random_state=random_state,
+        )
 
     def fit(self, X, y):
         """Index ``X`` and keep its labels.
@@ -474,14 +476,16 @@ class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
         return counts / indices.shape[1]
 
     def predict(self, X):
-        """The class of most neighbours of each sample.
+        """The class most neighbours of each sample belong to.
 
         Parameters
         ----------
         X : sequence of samples
+            As for :meth:`kneighbors`.
 
         Returns
         -------
         ndarray of shape (n_samples,)
+            Labels of ``classes_``; a tied vote gives the first of them.
         """
         return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
