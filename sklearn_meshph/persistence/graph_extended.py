@@ -24,13 +24,11 @@ pivot pairs each descending edge with the ascending edge that creates its class.
 
 from __future__ import annotations
 
-from numbers import Real
 from typing import NamedTuple
 
 import numba
 import numpy as np
 
-from .._param_validation import Interval, validate_params
 from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import find_root
@@ -43,10 +41,9 @@ __all__ = [
     "GraphCycles",
     "batch_diagrams",
     "extended_persistence",
-    "graph_diagrams",
 ]
 
-#: The keys of :func:`extended_persistence`, in the order of :func:`graph_diagrams`.
+#: The keys of :func:`extended_persistence`, in the order of :func:`batch_diagrams`.
 GRAPH_DIAGRAMS = ("ord0", "rel1", "ext0", "ext1")
 
 
@@ -203,14 +200,16 @@ def _cycle_pairs(values, edges, up_positive, down_positive, down_forest):
 
 
 @numba.njit(cache=True)
-def _kept(births, deaths, min_persistence):
-    """Rows (birth, death) with ``|death - birth| > min_persistence``."""
+def _kept(values, births, deaths, min_persistence):
+    """Rows ``(values[birth], values[death])`` of the node pairs with ``|death - birth|
+    > min_persistence``."""
     out = np.empty((len(births), 2))
     count = 0
     for i in range(len(births)):
-        if abs(deaths[i] - births[i]) > min_persistence:
-            out[count, 0] = births[i]
-            out[count, 1] = deaths[i]
+        birth, death = values[births[i]], values[deaths[i]]
+        if abs(death - birth) > min_persistence:
+            out[count, 0] = birth
+            out[count, 1] = death
             count += 1
     return out[:count]
 
@@ -225,23 +224,22 @@ def _graph_diagrams(n_nodes, edges, values, min_persistence):
     down_births, down_deaths, _, down_forest, down_positive = _sweep(
         order[::-1], indptr, incident, edges
     )
-    ord0 = _kept(values[up_births], values[up_deaths], min_persistence)
-    rel1 = _kept(values[down_births], values[down_deaths], min_persistence)
-    # ext0: the ascending roots are the components' minima, in ascending order
-    top = np.full(n_nodes, -np.inf)
-    for v in range(n_nodes):
-        root = find_root(up_parent, v)
-        top[root] = max(top[root], values[v])
+    ord0 = _kept(values, up_births, up_deaths, min_persistence)
+    rel1 = _kept(values, down_births, down_deaths, min_persistence)
+    # ext0: the ascending roots are the components' minima; their highest nodes are the
+    # last of each component in ascending order
+    top = np.empty(n_nodes, dtype=np.int64)
+    for v in order:
+        top[find_root(up_parent, v)] = v
     roots = order[up_parent[order] == order]
-    ext0 = _kept(values[roots], top[roots], min_persistence)
+    ext0 = _kept(values, roots, top[roots], min_persistence)
+    # ext1: each pair (ascending edge, descending edge) as (its upper, its lower node)
     pairs = _cycle_pairs(values, edges, up_positive, down_positive, down_forest)
-    births = np.empty(len(pairs))
-    deaths = np.empty(len(pairs))
     for i in range(len(pairs)):
         a, d = pairs[i, 0], pairs[i, 1]
-        births[i] = max(values[edges[a, 0]], values[edges[a, 1]])
-        deaths[i] = min(values[edges[d, 0]], values[edges[d, 1]])
-    ext1 = _kept(births, deaths, min_persistence)
+        pairs[i, 0] = edges[a, 0] if values[edges[a, 0]] > values[edges[a, 1]] else edges[a, 1]
+        pairs[i, 1] = edges[d, 0] if values[edges[d, 0]] < values[edges[d, 1]] else edges[d, 1]
+    ext1 = _kept(values, pairs[:, 0], pairs[:, 1], min_persistence)
     return ord0, rel1, ext0, ext1
 
 
@@ -279,23 +277,17 @@ def _batch(job_nodes, job_edges, job_values, edges, values, min_persistence, low
     return packed, counts
 
 
-def graph_diagrams(graph: GraphCycles, values: np.ndarray, min_persistence: float = 0.0):
-    """``(ord0, rel1, ext0, ext1)`` of one function on a graph, gudhi's orientation (see
-    :func:`extended_persistence`); ``values`` finite float64 ``(n_nodes,)``,
-    contiguous."""
-    return _graph_diagrams(graph.n_nodes, graph.edges, values, float(min_persistence))
-
-
 def batch_diagrams(
     samples, min_persistence: float = 0.0, lower_first: bool = False
 ) -> list[list[tuple]]:
-    """:func:`graph_diagrams` of many functions on many graphs in one compiled call.
+    """The four diagrams of many functions on many graphs, in one compiled call.
 
     ``samples``: ``(graph, values)`` pairs, ``graph`` a :class:`GraphCycles` and
     ``values`` finite of shape ``(n_nodes,)`` or ``(n_nodes, k)``. Returns, per sample,
-    the list over its functions of ``(ord0, rel1, ext0, ext1)`` (views into packed
-    arrays); ``lower_first``: ``rel1`` and ``ext1`` as ``(death, birth)``, the library's
-    orientation.
+    the list over its functions of ``(ord0, rel1, ext0, ext1)`` as
+    :func:`extended_persistence` orients them (views into packed arrays), points with
+    ``|death - birth| <= min_persistence`` left out; ``lower_first``: ``rel1`` and
+    ``ext1`` as ``(death, birth)``, the library's orientation.
     """
     if not samples:
         return []
@@ -319,9 +311,12 @@ def batch_diagrams(
         float(min_persistence),
         bool(lower_first),
     )
-    bounds = np.cumsum(counts, axis=0)
-    parts = [np.split(packed[k][: bounds[-1, k]], bounds[:-1, k]) for k in range(4)]
-    per_job = list(zip(*parts, strict=True))
+    bounds = np.vstack([np.zeros((1, 4), np.int64), np.cumsum(counts, axis=0)]).tolist()
+    ord0, rel1, ext0, ext1 = packed
+    per_job = [
+        (ord0[a[0] : b[0]], rel1[a[1] : b[1]], ext0[a[2] : b[2]], ext1[a[3] : b[3]])
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    ]
     out, job = [], 0
     for _, values in samples:
         n_functions = 1 if values.ndim == 1 else values.shape[1]
@@ -330,8 +325,7 @@ def batch_diagrams(
     return out
 
 
-@validate_params({"min_persistence": [Interval(Real, 0, None, closed="left")]})
-def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np.ndarray]:
+def extended_persistence(sample, values) -> dict[str, np.ndarray]:
     """The four extended persistence diagrams of a function on a graph's nodes.
 
     The lower-star filtration of the graph (node ``v`` at ``values[v]``, edge ``uv`` at
@@ -346,9 +340,6 @@ def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np
         are ignored.
     values : array-like of shape (n_nodes,)
         The function on the nodes, finite.
-    min_persistence : float, default=0.0
-        Points with ``|death - birth| <= min_persistence`` are dropped (gudhi's meaning
-        of its parameter): by default the zero-length ones.
 
     Returns
     -------
@@ -378,13 +369,13 @@ def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np
     cycle in the descending sweep gives a column (its cycle in the descending spanning
     forest), reduced left to right.
 
-    Ties in ``values`` change which zero-length points exist, never the others. With
-    the default ``min_persistence`` every zero-length point is dropped (isolated nodes
-    and constant components in ``ext0``, cycles on which ``values`` is constant in
-    ``ext1``), as gudhi's default does: the output equals gudhi's off the diagonal
-    (gudhi rescales the values internally, so its coordinates may differ in the last
-    bits and it may keep a few points of length near zero). Rows come in the order the
-    sweeps find them.
+    Ties in ``values`` change which zero-length points exist, never the others. Every
+    zero-length point is dropped (isolated nodes and constant components in ``ext0``,
+    cycles on which ``values`` is constant in ``ext1``), as gudhi's default
+    ``min_persistence=0`` does: the output equals gudhi's off the diagonal (gudhi
+    rescales the values internally, so its coordinates may differ in the last bits and
+    it may keep a few points of length near zero). Rows come in the order the sweeps
+    find them.
 
     Examples
     --------
@@ -407,6 +398,5 @@ def extended_persistence(sample, values, *, min_persistence=0.0) -> dict[str, np
     values = check_values(values, graph.n_nodes, where(None))
     if values.ndim != 1:
         raise ValueError(f"values must have shape ({graph.n_nodes},), got {values.shape}")
-    cycles = GraphCycles(graph.n_nodes, graph.edges)
-    diagrams = graph_diagrams(cycles, np.ascontiguousarray(values), min_persistence)
+    diagrams = _graph_diagrams(graph.n_nodes, graph.edges, np.ascontiguousarray(values), 0.0)
     return dict(zip(GRAPH_DIAGRAMS, diagrams, strict=True))

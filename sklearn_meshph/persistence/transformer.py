@@ -33,7 +33,7 @@ def _sample_arrays(sample, index):
         return sample.faces, sample.edges, sample.n_vertices, sample.values, sample.is_graph
     if isinstance(sample, tuple | list) and len(sample) == 2:
         mesh, values = sample
-        first, faces = check_input(mesh, index=index)
+        first, faces = (mesh, None) if isinstance(mesh, Graph) else check_input(mesh, index=index)
         if isinstance(first, Graph):
             values = check_values(values, first.n_nodes, where(index))
             return np.empty((0, 3), dtype=np.int64), first.edges, first.n_nodes, values, True
