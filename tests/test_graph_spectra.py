@@ -311,6 +311,7 @@ def test_graph_fields():
     np.testing.assert_array_equal(field.vertex_indices, [2, 3, 4, 5])
     np.testing.assert_array_equal(field.input_to_kept, [-1, -1, 0, 1, 2, 3])
     assert field.cleaning.n_other_components == 1 and field.cleaning.n_component_vertices == 2
+    assert field.cleaning.area_share == pytest.approx(0.2)  # 1 of 5 unit edge weights
     assert field.column_names == ("eigenfunction 1", "eigenfunction 2")
     np.testing.assert_allclose(field.spectrum, [0, 2 * 4, 2 * 4], atol=1e-9)  # M = I / 4
 

@@ -157,8 +157,9 @@ def graph_components(graph: Graph, components: str, index) -> tuple[Graph, Clean
         )
     if n_components > 1 and components == "largest":
         keep = labels == np.argmax(np.bincount(labels))  # labels follow the lowest nodes
-        total = graph.weights.sum()
-        weight_share = 1.0 - graph.weights[keep[graph.edges[:, 0]]].sum() / total if total else 0.0
+        if graph.n_edges:  # relative to the largest weight: no overflow in the sums
+            scaled = graph.weights / graph.weights.max()
+            weight_share = 1.0 - scaled[keep[graph.edges[:, 0]]].sum() / scaled.sum()
     vertex_indices = np.flatnonzero(keep)
     input_to_kept = np.full(n, -1, dtype=np.int64)
     input_to_kept[vertex_indices] = np.arange(len(vertex_indices))
