@@ -94,16 +94,16 @@ def dense_eigenpairs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The ``n_eigenpairs`` smallest eigenpairs of ``L phi = lambda diag(mass) phi`` by
     LAPACK, as the standard problem of ``M^-1/2 L M^-1/2`` (``mass`` positive): all of
-    them by divide and conquer, fewer by relatively robust representations. Unsorted
-    signs; eigenvalues ascending. Operators beyond :data:`DENSE_LIMIT` rows are refused
+    them by divide and conquer, fewer by relatively robust representations. Eigenvalues
+    ascending, signs not fixed yet. Operators beyond :data:`DENSE_LIMIT` rows are refused
     with a ``ValueError`` (the matrices would not fit in memory)."""
     n = L.shape[0]
     if n > DENSE_LIMIT:
         gigabytes = 2 * 8 * n * n / 1e9
         raise ValueError(
             f"the dense eigensolver needs two {n} x {n} matrices ({gigabytes:.3g} GB), above "
-            f"its limit of {DENSE_LIMIT} rows: ask for fewer eigenpairs than rows, with "
-            "solver='auto'"
+            f"its limit of {DENSE_LIMIT} rows: ask for fewer eigenpairs than rows "
+            "(n_eigenpairs), with solver='auto'"
         )
     inverse_root = 1.0 / np.sqrt(mass)
     A = L.toarray()
