@@ -454,3 +454,15 @@ def test_weights_beyond_float64s_range_are_refused():
     np.testing.assert_allclose(
         spectrum(tiny, "graph"), [0, 1e-300, 3e-300], rtol=1e-12, atol=1e-310
     )
+
+
+def test_fixed_times_on_a_mesh_are_the_same_sum_over_its_eigenpairs():
+    sphere = trimesh.creation.icosphere(2)
+    eigen = LaplacianEigenTransformer(signature="hks", n_eigenpairs=20, times=[0.01, 0.1])
+    (field,) = eigen.fit_transform([sphere])
+    (basis,) = LaplacianEigenTransformer(
+        eigen_index=tuple(range(20)), n_eigenpairs=20
+    ).fit_transform([sphere])
+    expected = (basis.values**2) @ np.exp(-np.outer(basis.eigenvalues, [0.01, 0.1]))
+    np.testing.assert_allclose(field.values, expected, rtol=1e-10)
+    assert field.column_names[1] == "heat kernel signature t=0.1"
