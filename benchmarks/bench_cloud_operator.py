@@ -58,11 +58,11 @@ from sklearn_meshph.spectral.eigensolver import generalized_eigenpairs
 #: Sumner figures (one pose of each) and Watertight dev meshes with thin or close parts.
 SHAPES = (
     "sumner/cat/cat-01.obj",
-    "sumner/elephant/elephant-01.obj",
+    "sumner/elephant/elephant-poses_1.obj",
     "sumner/horse/horse-01.obj",
     "sumner/lion/lion-01.obj",
-    "sumner/face/face-01.obj",
-    "sumner/head/head-01.obj",
+    "sumner/face/face-poses_1.obj",
+    "sumner/head/head-01-anger.obj",
     "watertight_dev/hand/181.off.gz",
     "watertight_dev/octopus/121.off.gz",
     "watertight_dev/ant/081.off.gz",

@@ -32,7 +32,8 @@ from sklearn_meshph import (
     point_cloud_laplacian,
     sample_point_cloud,
 )
-from sklearn_meshph.pointcloud.graph import GRAPH_NEIGHBORS, knn_graph
+from sklearn_meshph.mesh import unit_box
+from sklearn_meshph.pointcloud.graph import GRAPH_NEIGHBORS, knn_graph, surface_graph
 from sklearn_meshph.pointcloud.laplacians import CLOUD_LAPLACIANS
 from sklearn_meshph.spectral.cache import CacheWarning
 from sklearn_meshph.spectral.laplacians import LAPLACIANS
@@ -318,12 +319,12 @@ def test_check_point_cloud_returns_float64_points():
 
 
 def gudhi_graph_h0(points, values):
-    """Sublevel H0 of the lower-star filtration of the kNN graph, by gudhi."""
+    """Sublevel H0 of the lower-star filtration of the cloud's complex, by gudhi."""
     gudhi = pytest.importorskip("gudhi")
     tree = gudhi.SimplexTree()
     for v, value in enumerate(values):
         tree.insert([v], filtration=value)
-    for a, b in knn_graph(points):
+    for a, b in surface_graph(points):
         tree.insert([int(a), int(b)], filtration=max(values[a], values[b]))
     tree.persistence(homology_coeff_field=2, persistence_dim_max=False)
     pairs = tree.persistence_intervals_in_dimension(0)
@@ -350,11 +351,18 @@ def brute_force_knn_graph(points, k=GRAPH_NEIGHBORS):
     return np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)
 
 
-def test_the_field_carries_a_symmetric_knn_graph(sampled):
+def test_knn_graph_is_the_symmetric_knn_graph(sampled):
+    np.testing.assert_array_equal(knn_graph(sampled), brute_force_knn_graph(sampled))
+
+
+def test_the_field_carries_the_edges_of_the_operators_triangles(sampled):
     (field,) = fields([sampled], eigen_index=1)
-    np.testing.assert_array_equal(field.edges, brute_force_knn_graph(sampled))
+    np.testing.assert_array_equal(field.edges, surface_graph(sampled))
+    L, _ = point_cloud_laplacian(unit_box(sampled)[0])
+    a, b = field.edges.T
+    assert (np.asarray(L[a, b]).ravel() != 0).all()  # every edge couples its ends
     degree = np.bincount(field.edges.ravel(), minlength=field.n_vertices)
-    assert degree.min() >= GRAPH_NEIGHBORS
+    assert degree.min() >= 3
     assert not field.edges.flags.writeable
     with pytest.raises(ValueError, match="ScalarField: edge 0 has index"):
         ScalarField(field.vertices, field.faces, field.values, edges=[[0, len(sampled)]])

@@ -61,7 +61,7 @@ class ScalarField:
         eigenfunction's first (at unit area by default): what :class:`ShapeDNA` reads.
     edges : ndarray of shape (n_edges, 2), optional
         Edges of the complex beyond those of the faces, as indices into ``vertices``:
-        for a point cloud, its symmetric k-nearest-neighbour graph (see
+        for a point cloud, the edges of its local triangles (see
         :class:`LaplacianEigenTransformer`). ``None`` means none.
     column_names : tuple of str, optional
         What each column of ``values`` is, for labels and legends:

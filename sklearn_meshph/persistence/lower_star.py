@@ -10,7 +10,7 @@ from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import find_root, mesh_edges
 from ..mesh.validation import check_values
-from ..pointcloud.graph import edge_adjacency, knn_graph
+from ..pointcloud.graph import edge_adjacency, surface_graph
 
 __all__ = ["elder_merge", "lower_star_persistence", "sublevel_h0"]
 
@@ -97,8 +97,8 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
         The simplicial complex: vertices, edges and triangles of the mesh as given (no
         cleaning: an unreferenced vertex is a component of its own). A point cloud (an
         ``(n, 3)`` array, a ``trimesh.PointCloud`` or a file of points) is filtered on
-        its symmetric k-nearest-neighbour graph
-        (:func:`sklearn_meshph.pointcloud.graph.knn_graph`), a graph (a
+        the edges of its local triangles
+        (:func:`sklearn_meshph.pointcloud.graph.surface_graph`), a graph (a
         :class:`~sklearn_meshph.graph.Graph`, an ``(n_nodes, edges)`` pair, a sparse
         adjacency or a networkx graph) on its nodes and edges.
     values : array-like of shape (n_vertices,)
@@ -150,7 +150,7 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
     if isinstance(vertices, Graph):
         adjacency = edge_adjacency(vertices.edges, n_vertices)
     elif faces is None:
-        adjacency = edge_adjacency(knn_graph(vertices), n_vertices)
+        adjacency = edge_adjacency(surface_graph(vertices), n_vertices)
     else:
         adjacency = mesh_edges(faces, n_vertices)
     pairs, essential, _ = sublevel_h0(adjacency, values)

@@ -57,15 +57,20 @@ def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarra
 def _frames(relative: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals ``(n, 3)`` and tangent bases ``(n, 3, 2)``: the principal directions
     of the weighted neighbours, relative to each point (the plane goes through it)."""
-    covariance = np.einsum("nk,nki,nkj->nij", weights, relative, relative)
+    covariance = np.matmul((relative * weights[..., None]).transpose(0, 2, 1), relative)
     directions = np.linalg.eigh(covariance)[1]
     return directions[:, :, 0], directions[:, :, 1:]
+
+
+def _along(vectors, directions):
+    """``(n, k)`` components of ``vectors`` ``(n, k, 3)`` along ``directions`` ``(n, 3)``."""
+    return np.matmul(vectors, directions[..., None])[..., 0]
 
 
 def _flat(relative, normal, reach):
     """Neighbours whose height over the tangent plane is within ``MAX_SLOPE`` of their
     ``reach`` (distance, at least the ``NORMAL_NEIGHBORS``-th neighbour's)."""
-    return np.abs(np.einsum("nki,ni->nk", relative, normal)) <= MAX_SLOPE * reach
+    return np.abs(_along(relative, normal)) <= MAX_SLOPE * reach
 
 
 def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
@@ -91,7 +96,7 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     nearest_ones[:, :first] = 1.0
     normal, _ = _frames(relative, nearest_ones)
     normal, basis = _frames(relative, _flat(relative, normal, reach).astype(np.float64))
-    agree = np.abs(np.einsum("nki,ni->nk", normal[neighbors], normal)) >= MIN_NORMAL_COSINE
+    agree = np.abs(_along(normal[neighbors], normal)) >= MIN_NORMAL_COSINE
     usable = _flat(relative, normal, reach) & agree
     return neighbors, relative, usable, normal, basis
 
@@ -107,14 +112,14 @@ def _heights(coords, height, usable, unit):
     """
     x, y = coords[..., 0] / unit, coords[..., 1] / unit
     terms = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=-1)
-    weights = usable.astype(np.float64)
-    gram = np.einsum("nk,nki,nkj->nij", weights, terms, terms)
+    weighted = (terms * usable[..., None]).transpose(0, 2, 1)
+    gram = np.matmul(weighted, terms)
     gram[:, 0, 0] += 1.0  # the point itself, at height zero
     gram += 1e-6 * np.eye(6)
-    moments = np.einsum("nk,nki,nk->ni", weights, terms, height / unit)
-    coefficients = np.linalg.solve(gram, moments[..., None])[..., 0]
+    moments = np.matmul(weighted, (height / unit)[..., None])
+    coefficients = np.linalg.solve(gram, moments)[..., 0]
     coefficients[usable.sum(axis=1) < 7] = 0.0
-    return (np.einsum("nki,ni->nk", terms, coefficients) - coefficients[:, :1]) * unit
+    return (_along(terms, coefficients) - coefficients[:, :1]) * unit
 
 
 def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
@@ -132,9 +137,9 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     dropped. ``points`` must be distinct.
     """
     neighbors, relative, usable, normal, basis = surface_neighbours(points, n_neighbors)
-    coords = np.ascontiguousarray(np.einsum("nki,nij->nkj", relative, basis))
+    coords = np.ascontiguousarray(np.matmul(relative, basis))
     unit = np.linalg.norm(relative[:, min(NORMAL_NEIGHBORS, neighbors.shape[1]) - 1], axis=1)
-    lift = _heights(coords, np.einsum("nki,ni->nk", relative, normal), usable, unit[:, None])
+    lift = _heights(coords, _along(relative, normal), usable, unit[:, None])
     fans = local_delaunay_fans(coords, usable)
     i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
     a = np.column_stack([coords[i, ja], lift[i, ja]])

@@ -1,12 +1,13 @@
-"""The neighbourhood graph of a point cloud: the complex its lower-star filtration uses.
+"""The graphs of a point cloud: the complex its lower-star filtration uses, and its
+neighbourhood graph.
 
-A point cloud has no edges of its own. Its vertex functions are filtered over the
-symmetric k-nearest-neighbour graph (an edge wherever either point is among the other's
-``GRAPH_NEIGHBORS`` nearest), the role the mesh's edges play for a mesh: that many
-neighbours is where the H0 diagrams of a mesh's eigenfunctions on its vertices stop
-depending on the graph (fewer leave spurious components and pairs; the measurement is
-in ``docs/point_clouds.md``). Without its long edges, the same graph decides which
-points are far from the rest (:func:`neighbourhood_components`).
+A point cloud has no edges of its own. Its vertex functions are filtered over the edges
+of the local triangles its operator is made of (:func:`surface_graph`), the role the
+mesh's edges play for a mesh: the complex joins what the operator couples and nothing
+else, so it never crosses a thin part or the gap between parts nearby. The symmetric
+k-nearest-neighbour graph (an edge wherever either point is among the other's
+``GRAPH_NEIGHBORS`` nearest) is the ``"graph"`` Laplacian's; without its long edges, it
+decides which points are far from the rest (:func:`neighbourhood_components`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import scipy.sparse as sp
 
 from ..mesh import unit_box
 from ..mesh.graph import connected_components
-from ._triangulation import nearest
+from ._triangulation import nearest, tangent_fans
 
 __all__ = [
     "FAR_EDGE_RATIO",
@@ -26,6 +27,7 @@ __all__ = [
     "knn_graph",
     "nearest",
     "neighbourhood_components",
+    "surface_graph",
 ]
 
 #: Neighbours per point of the graph that lower-star persistence filters on a cloud.
@@ -62,6 +64,26 @@ def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndar
     edges = np.column_stack([np.minimum(a, b), np.maximum(a, b)])
     edges = edges[edges[:, 0] != edges[:, 1]]
     return np.unique(edges, axis=0)
+
+
+def surface_graph(points: np.ndarray) -> np.ndarray:
+    """Edges ``(m, 2)`` (``a < b``, sorted, each once) of the cloud's local triangles.
+
+    The triangles of :func:`._triangulation.tangent_fans` (those the ``"cotangent"``
+    operator sums), computed in the unit box and in :func:`canonical_order`, then
+    renumbered: the same edges at any scale float64 holds, and a permuted cloud gives
+    the permuted edges. A point in no triangle (its neighbourhood on a line) has no
+    edge: it is a component of its own, as an unreferenced vertex of a mesh is.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if len(points) < 3:
+        return np.empty((0, 2), dtype=np.int64)
+    order = canonical_order(points)
+    triangles = tangent_fans(unit_box(points[order])[0])[0]
+    a = order[triangles[:, [0, 1, 2]].ravel()]
+    b = order[triangles[:, [1, 2, 0]].ravel()]
+    edges = np.column_stack([np.minimum(a, b), np.maximum(a, b)])
+    return np.unique(edges[edges[:, 0] != edges[:, 1]], axis=0)
 
 
 def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
