@@ -466,3 +466,15 @@ def test_fixed_times_on_a_mesh_are_the_same_sum_over_its_eigenpairs():
     expected = (basis.values**2) @ np.exp(-np.outer(basis.eigenvalues, [0.01, 0.1]))
     np.testing.assert_allclose(field.values, expected, rtol=1e-10)
     assert field.column_names[1] == "heat kernel signature t=0.1"
+
+
+def test_graphs_too_small_for_the_request_are_named():
+    with pytest.raises(ValueError, match="sample 0: eigen_index 3 needs at least 4 nodes, the"):
+        LaplacianEigenTransformer(laplacian="graph", eigen_index=3).fit_transform([path(3)])
+    single = make_graph(1, np.empty((0, 2)))
+    with pytest.raises(ValueError, match="sample 0: the cleaned graph has too few nodes"):
+        LaplacianEigenTransformer(laplacian="graph", signature="hks").fit_transform([single])
+    (field,) = LaplacianEigenTransformer(
+        laplacian="graph", signature="hks", times=[1.0]
+    ).fit_transform([single])  # fixed times need no positive eigenvalue
+    np.testing.assert_allclose(field.values, [[1.0]])

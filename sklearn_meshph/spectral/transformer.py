@@ -496,7 +496,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         else:
             warn_if_lossy(report, describe(i, sample), stacklevel=4)
             warn_if_needles(clean, i, stacklevel=4)
-        what = "graph has too few nodes" if graph else "mesh has too few vertices"
+        kind, units = ("graph", "nodes") if graph else ("mesh", "vertices")
         if signature is not None:
             # Exactly the eigenpairs asked for: the solve's block is not seen.
             if n_kept is None and not graph:
@@ -504,7 +504,7 @@ class LaplacianEigenTransformer(SampleTransformer):
             values, vectors = values[:n_kept], vectors[:, :n_kept]
             fixed = self.times is not None and self.signature in HEAT_SIGNATURES
             if len(values) < (1 if fixed else 2):
-                raise ValueError(f"sample {i}: the cleaned {what}")
+                raise ValueError(f"sample {i}: the cleaned {kind} has too few {units}")
             try:
                 field_values, names = signature(
                     values, vectors, check_times(self.times) if fixed else self.n_scales
@@ -515,8 +515,7 @@ class LaplacianEigenTransformer(SampleTransformer):
         elif max(indices) >= len(values):
             raise ValueError(
                 f"sample {i}: eigen_index {max(indices)} needs at least "
-                f"{max(indices) + 1} {'nodes' if graph else 'vertices'}, the cleaned "
-                f"{what.split()[0]} has {len(values)}"
+                f"{max(indices) + 1} {units}, the cleaned {kind} has {len(values)}"
             )
         else:
             warn_if_repeated(values, indices, i, complete)
