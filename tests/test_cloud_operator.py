@@ -56,7 +56,7 @@ def test_a_folded_strip_is_not_short_circuited():
 
 
 def test_a_thin_cylinder_keeps_its_area_and_spectrum():
-    # A finger: radius 0.05, about 12 points around at 1,000 points over its length.
+    # A finger: radius 0.05, about 18 points around (1,000 points over a length of 1).
     rng = np.random.default_rng(1)
     angle, height = rng.random(1000) * 2 * np.pi, rng.random(1000)
     points = np.column_stack([0.05 * np.cos(angle), 0.05 * np.sin(angle), height])
