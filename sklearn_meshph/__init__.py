@@ -39,7 +39,7 @@ from .mesh import (
     weld_vertices,
 )
 from .persistence import LowerStarPersistence, extended_persistence, lower_star_persistence
-from .pipelines import make_mesh_distance
+from .pipelines import make_graph_classifier, make_mesh_distance
 from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
 from .retrieval import ShapeNeighbors, ShapeNeighborsClassifier, retrieval_scores
@@ -90,6 +90,7 @@ __all__ = [
     "load_mesh_folder",
     "load_tu_dataset",
     "lower_star_persistence",
+    "make_graph_classifier",
     "make_mesh_distance",
     "make_shapes",
     "point_cloud_laplacian",

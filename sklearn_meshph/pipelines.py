@@ -1,13 +1,15 @@
-"""Ready-made pipelines from meshes to a precomputed distance matrix: the library's
-default, chosen by cross-validation, and the settings it is compared with; and every
-option family of the package, for the documentation's tables."""
+"""Ready-made pipelines from meshes (or graphs) to a precomputed distance matrix: the
+library's default, chosen by cross-validation, and the settings it is compared with; the
+graph classifier; and every option family of the package, for the documentation's
+tables."""
 
 from __future__ import annotations
 
 import os
 from numbers import Integral
 
-from sklearn.pipeline import Pipeline
+from sklearn.ensemble import ExtraTreesClassifier
+from sklearn.pipeline import FeatureUnion, Pipeline
 
 from ._param_validation import HasMethods, Interval, Options, validate_params
 from ._registry import Option, Registry
@@ -18,8 +20,9 @@ from .persistence import LowerStarPersistence
 from .persistence.filtrations import FILTRATIONS
 from .spectral import LAPLACIANS, SIGNATURES, SOLVERS, LaplacianEigenTransformer, ShapeDNA
 from .spectral.cache import cache_of
+from .vectorization import DiagramStatistics, GraphFeatures
 
-__all__ = ["PRESETS", "all_registries", "make_mesh_distance"]
+__all__ = ["PRESETS", "all_registries", "make_graph_classifier", "make_mesh_distance"]
 
 # The extended-persistence diagrams of the default (ids of LowerStarPersistence's parts:
 # the superlevel pairs (saddle, max), the components' ranges, the essential H1 of closed
@@ -31,6 +34,11 @@ _DNA_WEIGHT = 0.5
 _EIGENPAIRS = 56
 _DNA_EIGENPAIRS = 50
 _SCALES = 5
+# The graph pipeline: PersLay's heat kernel signatures of the normalized Laplacian (every
+# eigenpair), the extended persistence of each on the graph, and trees on features.
+_GRAPH_TIMES = (0.1, 10.0)
+_GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
+_GRAPH_TREES = 300
 
 
 def _default(common):
@@ -114,6 +122,50 @@ def _shape_dna(common):
     )
 
 
+def _graph_eigen(eigen, times=_GRAPH_TIMES):
+    return LaplacianEigenTransformer(
+        laplacian="normalized",
+        normalization="none",
+        components="all",
+        signature="hks",
+        times=times,
+        **eigen,
+    )
+
+
+def _graph(common):
+    n_jobs, verbose = common["n_jobs"], common["verbose"]
+    parts = [
+        (
+            kind,
+            Pipeline(
+                [
+                    (
+                        "persistence",
+                        LowerStarPersistence(
+                            filtration="extended", parts=(kind,), n_jobs=n_jobs, verbose=verbose
+                        ),
+                    ),
+                    (
+                        "distance",
+                        DiagramDistance(
+                            metric="wasserstein", order=1.0, n_jobs=n_jobs, verbose=verbose
+                        ),
+                    ),
+                ]
+            ),
+        )
+        for kind in _GRAPH_KINDS
+    ]
+    features = Pipeline(
+        [
+            ("graph", GraphFeatures()),
+            ("distance", FeatureDistance(metric="canberra", n_jobs=n_jobs)),
+        ]
+    )
+    return _graph_eigen(common["eigen"]), CombinedDistance([*parts, ("features", features)])
+
+
 PRESETS = Registry(
     "preset",
     [
@@ -144,6 +196,15 @@ PRESETS = Registry(
             _shape_dna,
             "the spectral baseline: the first 30 non-zero eigenvalues at unit area, "
             "Canberra distance (sum of differences relative to their sums)",
+        ),
+        Option(
+            "graph",
+            _graph,
+            "graphs (PersLay's signatures): heat kernel signatures of the normalized "
+            "Laplacian at t = 0.1 and 10 from every eigenpair, whole graphs, the four "
+            "diagrams of extended persistence on the graph, W1 per diagram kind, plus "
+            "`GraphFeatures` (size, spectrum, signature quantiles, pair distances; "
+            "Canberra), each median-normalized, equal weights",
         ),
     ],
     aliases={"0.1": "eigenfunctions"},
@@ -197,6 +258,8 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
           accepted with a ``FutureWarning``.
         - ``"paper"``: the paper's literal setting.
         - ``"shape-dna"``: the spectral baseline.
+        - ``"graph"``: for graphs (what the main job runs on a TU dataset folder):
+          the diagrams and features of :func:`make_graph_classifier` as distances.
     memory : str, path, joblib.Memory or None, default=None
         Cache of the eigensolves (see :class:`LaplacianEigenTransformer`): with it, a
         second call or a grid search over the pipeline's parameters solves each mesh
@@ -236,3 +299,102 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
     }
     eigen, distance = PRESETS[preset].value(common)  # a former name warns
     return Pipeline([("eigen", eigen), ("distance", distance)])
+
+
+@validate_params(
+    {
+        "times": [tuple, list],
+        "n_estimators": [Interval(Integral, 1, None, closed="left")],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "n_jobs": [Integral, None],
+        "random_state": ["random_state"],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
+    }
+)
+def make_graph_classifier(
+    *,
+    times=_GRAPH_TIMES,
+    n_estimators=_GRAPH_TREES,
+    memory=None,
+    n_jobs=None,
+    random_state=0,
+    verbose=0,
+):
+    """A classifier of graphs: signatures, their extended persistence, features, trees.
+
+    Three steps, each searchable like any pipeline's (``GridSearchCV`` over
+    ``classifier__max_features``, ``features__graph__n_bins``, ``eigen__times``...):
+
+    - ``"eigen"``: a :class:`LaplacianEigenTransformer` with PersLay's setting, the
+      heat kernel signatures of the symmetric normalized Laplacian at fixed ``times``
+      from every eigenpair (a dense solve), whole graphs (``components="all"``: a
+      graph's components are part of it), no normalization;
+    - ``"features"``: a ``FeatureUnion`` of ``"diagrams"`` (:class:`LowerStarPersistence`
+      with ``filtration="extended"``: the four diagrams of each signature on the graph,
+      then :class:`DiagramStatistics`) and ``"graph"`` (:class:`GraphFeatures`: size,
+      degrees, the spectrum's histogram, the signatures' quantiles and histograms of
+      the distances between pairs of nodes);
+    - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
+      features of very different ranges and no tuning.
+
+    The graphs are read as unweighted structure: node labels or attributes are not
+    used. Nothing in it is tuned per dataset; ``docs/graphs.md`` has its accuracy under
+    PersLay's protocol on six TU datasets.
+
+    Parameters
+    ----------
+    times : tuple of float, default=(0.1, 10.0)
+        Times of the heat kernel signatures (PersLay's).
+    n_estimators : int, default=300
+        Trees of the forest.
+    memory : str, path, joblib.Memory or None, default=None
+        Cache of the eigensolves (see :class:`LaplacianEigenTransformer`).
+    n_jobs : int, default=None
+        Parallel jobs of the eigen stage, persistence and the forest (joblib).
+    random_state : int, RandomState or None, default=0
+        Seed of the forest (and of the eigen stage's start vector, which a dense solve
+        does not use).
+    verbose : int, default=0
+        Progress bars of the stages that have them.
+
+    Returns
+    -------
+    sklearn.pipeline.Pipeline
+        A classifier: ``fit(graphs, y)``, ``predict(graphs)``, ``score(graphs, y)``, on
+        any graphs :func:`check_graph` reads.
+
+    See Also
+    --------
+    make_mesh_distance : ``make_mesh_distance("graph")``, the same diagrams and features
+        as a precomputed distance matrix (nearest neighbours, t-SNE).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import make_graph_classifier
+    >>> def cycle(n):
+    ...     return n, np.array([[i, (i + 1) % n] for i in range(n)])
+    >>> def path(n):
+    ...     return n, np.array([[i, i + 1] for i in range(n - 1)])
+    >>> graphs = [cycle(n) for n in range(5, 11)] + [path(n) for n in range(5, 11)]
+    >>> model = make_graph_classifier(n_estimators=20).fit(graphs, [0] * 6 + [1] * 6)
+    >>> model.predict([cycle(12), path(12)]).tolist()
+    [0, 1]
+    """
+    cache_of(memory)  # refuses an empty path before anything runs
+    eigen = _graph_eigen(
+        {"memory": memory, "n_jobs": n_jobs, "random_state": random_state, "verbose": verbose},
+        tuple(times),
+    )
+    diagrams = Pipeline(
+        [
+            (
+                "persistence",
+                LowerStarPersistence(filtration="extended", n_jobs=n_jobs, verbose=verbose),
+            ),
+            ("statistics", DiagramStatistics(n_jobs=n_jobs)),
+        ]
+    )
+    features = FeatureUnion([("diagrams", diagrams), ("graph", GraphFeatures())])
+    trees = ExtraTreesClassifier(n_estimators, n_jobs=n_jobs, random_state=random_state)
+    return Pipeline([("eigen", eigen), ("features", features), ("classifier", trees)])

@@ -3,6 +3,7 @@ kernels (precomputed kernel matrices) of persistence diagrams."""
 
 from .curves import BettiCurve, EntropyCurve, PersistenceLandscape, Silhouette
 from .distance_kernel import DistanceKernel
+from .graph_features import GraphFeatures
 from .images import PersistenceImage
 from .kernels import (
     PersistenceScaleSpaceKernel,
@@ -16,6 +17,7 @@ __all__ = [
     "DiagramStatistics",
     "DistanceKernel",
     "EntropyCurve",
+    "GraphFeatures",
     "PersistenceEntropy",
     "PersistenceImage",
     "PersistenceLandscape",

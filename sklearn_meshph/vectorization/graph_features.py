@@ -1,0 +1,296 @@
+"""Structure and spectrum of graphs as features: what the graph pipeline adds to the
+diagrams of its signatures (size, degrees, the spectrum's histogram, the signatures'
+quantiles, and histograms of the distances between pairs of nodes)."""
+
+from __future__ import annotations
+
+from numbers import Integral
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components, shortest_path
+from sklearn.utils.validation import check_is_fitted
+
+from .._base import SampleTransformer
+from .._param_validation import Interval
+from ..mesh.scalar_field import ScalarField
+
+__all__ = ["GraphFeatures"]
+
+_SIZE_NAMES = (
+    "n_nodes",
+    "n_edges",
+    "n_components",
+    "n_cycles",
+    "n_triangles",
+    "transitivity",
+    "degree_max",
+    "degree_mean",
+    "degree_std",
+    "isolated_nodes",
+    "leaf_fraction",
+)
+_SPECTRUM_NAMES = (
+    "eigenvalue_min_positive",
+    "eigenvalue_max",
+    "zero_eigenvalues",
+    "eigenvalue_mean_square",
+)
+_QUANTILES = (0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0)
+# Log-spaced edges of the histogram of harmonic distances (the normalized Laplacian's
+# pseudo-inverse; its values between neighbours are about 1).
+_HARMONIC_RANGE = (0.05, 50.0)
+# Dense pair matrices above this many nodes would not fit a laptop's memory.
+_MAX_PAIR_NODES = 4000
+_ZERO = 1e-8
+
+
+def _adjacency(field: ScalarField) -> sp.csr_matrix:
+    n, edges = field.n_vertices, field.edges
+    ones = np.ones(2 * len(edges))
+    rows, cols = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
+    return sp.csr_matrix((ones, (rows, cols)), shape=(n, n))
+
+
+def _size(adjacency) -> np.ndarray:
+    n = adjacency.shape[0]
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    m = degree.sum() / 2
+    components = connected_components(adjacency, directed=False)[0]
+    triangles = (adjacency @ adjacency).multiply(adjacency).sum() / 6
+    wedges = (degree * (degree - 1) / 2).sum()
+    return np.array(
+        [
+            n,
+            m,
+            components,
+            m - n + components,
+            triangles,
+            3 * triangles / wedges if wedges else 0.0,
+            degree.max(),
+            degree.mean(),
+            degree.std(),
+            np.count_nonzero(degree == 0),
+            np.count_nonzero(degree == 1) / n,
+        ]
+    )
+
+
+def _spectrum(spectrum: np.ndarray, n_bins: int) -> np.ndarray:
+    counts = np.histogram(np.clip(spectrum, 0.0, 2.0), np.linspace(0.0, 2.0, n_bins + 1))[0]
+    positive = spectrum[spectrum > _ZERO]
+    return np.r_[
+        counts,
+        counts / len(spectrum),
+        positive.min() if positive.size else 0.0,
+        spectrum.max(),
+        np.count_nonzero(spectrum <= _ZERO),
+        np.mean(spectrum**2),
+    ]
+
+
+def _signatures(values: np.ndarray) -> np.ndarray:
+    quantiles = np.quantile(values, _QUANTILES, axis=0)  # (n_quantiles, n_functions)
+    return np.vstack([quantiles, values.mean(axis=0), values.std(axis=0)]).T.ravel()
+
+
+def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
+    """Histograms over the node pairs of the hop distance and of the harmonic distance,
+    as fractions of the pairs; pairs in different components count as unreachable."""
+    n = adjacency.shape[0]
+    upper = np.triu_indices(n, 1)
+    n_pairs = max(len(upper[0]), 1)
+    hops = shortest_path(adjacency, unweighted=True, directed=False)[upper]
+    reachable = np.isfinite(hops)
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    scale = np.divide(1.0, np.sqrt(degree), out=np.zeros(n), where=degree > 0)
+    laplacian = np.eye(n) - scale[:, None] * adjacency.toarray() * scale[None, :]
+    eigenvalues, vectors = np.linalg.eigh(laplacian)
+    keep = eigenvalues > _ZERO
+    vectors = vectors[:, keep] / np.sqrt(eigenvalues[keep])
+    gram = vectors @ vectors.T
+    diagonal = np.diag(gram)
+    harmonic = (diagonal[:, None] + diagonal[None, :] - 2 * gram)[upper][reachable]
+    hop_edges = np.r_[np.arange(0.5, max_hops + 1), np.inf]
+    harmonic_edges = np.r_[0.0, np.geomspace(*_HARMONIC_RANGE, n_bins - 1), np.inf]
+    unreachable = np.count_nonzero(~reachable) / n_pairs
+    finite = hops[reachable]
+    return np.r_[
+        np.histogram(finite, hop_edges)[0] / n_pairs,
+        np.histogram(harmonic, harmonic_edges)[0] / n_pairs,
+        unreachable,
+        finite.mean() if finite.size else 0.0,
+        finite.max() if finite.size else 0.0,
+    ]
+
+
+class GraphFeatures(SampleTransformer):
+    """Structure and spectrum of each graph as a row of features.
+
+    Reads the graph fields of :class:`LaplacianEigenTransformer` (its ``laplacian``
+    on the graph's nodes, every eigenpair: ``n_eigenpairs=None`` behind a signature) and
+    gives, per graph:
+
+    - its size: nodes, edges, components, independent cycles, triangles, transitivity,
+      the largest, mean and spread of the degrees, isolated nodes, the share of leaves;
+    - its spectrum (the field's ``spectrum``): a histogram on ``[0, 2]``, the range of
+      the normalized Laplacian's eigenvalues, as counts and as fractions, the smallest
+      positive and the largest eigenvalue, the zero eigenvalues (one per component),
+      the mean square;
+    - each signature column (heat kernel signatures at fixed times): its quantiles
+      (0, 0.1, 0.25, 0.5, 0.75, 0.9, 1), mean and spread over the nodes;
+    - with ``pairs=True``, histograms over the pairs of nodes of the hop distance
+      (1 to ``max_hops`` hops, then farther) and of the harmonic distance of the
+      normalized Laplacian (``L+[i, i] + L+[j, j] - 2 L+[i, j]``, its pseudo-inverse
+      ``L+``, in ``n_pair_bins`` log-spaced bins), as fractions of the pairs, the
+      share of unreachable pairs (different components), the mean and largest hop
+      distance. A spectral cousin of FGSD's histograms of spectral distances.
+
+    The graph is read as unweighted (its edges). The pair histograms cost a dense
+    eigendecomposition of each graph (cubic in its nodes) and refuse graphs of more
+    than 4000 nodes; set ``pairs=False`` for larger graphs.
+
+    Parameters
+    ----------
+    n_bins : int, default=20
+        Bins of the spectrum's histogram.
+    pairs : bool, default=True
+        Whether to add the histograms over the pairs of nodes.
+    max_hops : int, default=20
+        Hop distances with a bin of their own; farther pairs share one.
+    n_pair_bins : int, default=30
+        Bins of the harmonic distance's histogram.
+
+    Attributes
+    ----------
+    n_features_out_ : int
+        The number of features.
+    n_functions_ : int
+        Signature columns of the fitted fields (the same for every sample).
+
+    See Also
+    --------
+    ShapeDNA : The first eigenvalues of a mesh as features.
+    make_graph_classifier : The graph pipeline these features are part of.
+
+    References
+    ----------
+    .. [1] S. Verma and Z.-L. Zhang, "Hunt For The Unique, Stable, Sparse And Fast
+       Feature Learning On Graphs", NeurIPS 2017.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph import GraphFeatures, LaplacianEigenTransformer
+    >>> cycle = (5, np.array([[0, 1], [1, 2], [2, 3], [3, 4], [0, 4]]))
+    >>> eigen = LaplacianEigenTransformer(laplacian="normalized", normalization="none",
+    ...                                   signature="hks", times=(0.1, 10.0))
+    >>> features = GraphFeatures().fit(eigen.fit_transform([cycle]))
+    >>> features.transform(eigen.transform([cycle]))[0, :4]  # nodes, edges, components, cycles
+    array([5., 5., 1., 1.])
+    """
+
+    _sample_kind = "scalar fields"
+    _parameter_constraints: dict = {
+        "n_bins": [Interval(Integral, 1, None, closed="left")],
+        "pairs": ["boolean"],
+        "max_hops": [Interval(Integral, 1, None, closed="left")],
+        "n_pair_bins": [Interval(Integral, 2, None, closed="left")],
+    }
+
+    def __init__(self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30):
+        self.n_bins = n_bins
+        self.pairs = pairs
+        self.max_hops = max_hops
+        self.n_pair_bins = n_pair_bins
+
+    def _fields(self, X, n_functions=None) -> list[ScalarField]:
+        fields = self._check_samples(X)
+        for i, field in enumerate(fields):
+            if not isinstance(field, ScalarField) or not field.is_graph:
+                raise TypeError(
+                    f"sample {i}: GraphFeatures reads the graph fields of "
+                    f"LaplacianEigenTransformer, got {type(field).__name__}"
+                    + ("" if not isinstance(field, ScalarField) else " of a mesh or a cloud")
+                )
+            if field.spectrum is None:
+                raise ValueError(f"sample {i}: the field has no spectrum")
+            if n_functions is not None and field.n_functions != n_functions:
+                raise ValueError(
+                    f"sample {i}: {field.n_functions} signature columns, the fitted fields "
+                    f"have {n_functions}"
+                )
+            if self.pairs and field.n_vertices > _MAX_PAIR_NODES:
+                raise ValueError(
+                    f"sample {i}: {field.n_vertices} nodes, more than the "
+                    f"{_MAX_PAIR_NODES} the pair histograms allow; set pairs=False"
+                )
+        return fields
+
+    def fit(self, X, y=None):
+        """Check the parameters and the fields; remember their number of signatures.
+
+        Parameters
+        ----------
+        X : sequence of ScalarField
+            Graph fields of :class:`LaplacianEigenTransformer`.
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        fields = self._fields(X)
+        self.n_functions_ = fields[0].n_functions
+        self._fields(fields, self.n_functions_)
+        self.n_features_out_ = len(self._names())
+        return self
+
+    def transform(self, X):
+        """The features of each graph.
+
+        Parameters
+        ----------
+        X : sequence of ScalarField
+            Graph fields with as many signature columns as the fitted ones.
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_features_out_)
+        """
+        check_is_fitted(self, "n_features_out_")
+        self._check_params()
+        rows = []
+        for field in self._fields(X, self.n_functions_):
+            adjacency = _adjacency(field)
+            values = field.values.reshape(field.n_vertices, -1)
+            parts = [_size(adjacency), _spectrum(field.spectrum, self.n_bins), _signatures(values)]
+            if self.pairs:
+                parts.append(_pairs(adjacency, self.max_hops, self.n_pair_bins))
+            rows.append(np.concatenate(parts))
+        return np.array(rows)
+
+    def _names(self) -> list[str]:
+        names = list(_SIZE_NAMES)
+        names += [f"spectrum_count_{k}" for k in range(self.n_bins)]
+        names += [f"spectrum_fraction_{k}" for k in range(self.n_bins)]
+        names += list(_SPECTRUM_NAMES)
+        for j in range(self.n_functions_):
+            names += [f"signature{j}_q{q:g}" for q in _QUANTILES]
+            names += [f"signature{j}_mean", f"signature{j}_std"]
+        if self.pairs:
+            names += [f"hops_{h}" for h in range(1, self.max_hops + 1)] + ["hops_farther"]
+            names += [f"harmonic_{k}" for k in range(self.n_pair_bins)]
+            names += ["unreachable_pairs", "hops_mean", "hops_max"]
+        return names
+
+    def get_feature_names_out(self, input_features=None):
+        """Names of the features, in output order.
+
+        Returns
+        -------
+        ndarray of str
+        """
+        check_is_fitted(self, "n_features_out_")
+        return np.array(self._names(), dtype=object)
