@@ -1,0 +1,167 @@
+"""The graph classifier, its features and the graph preset."""
+
+import pickle
+
+import numpy as np
+import pytest
+from conftest import data_folder
+from sklearn.base import clone
+from sklearn.model_selection import GridSearchCV, KFold, cross_val_score
+
+from sklearn_meshph import (
+    GraphFeatures,
+    LaplacianEigenTransformer,
+    ScalarField,
+    load_tu_dataset,
+    make_graph_classifier,
+    make_mesh_distance,
+)
+
+
+def cycle(n):
+    return n, np.array([[i, (i + 1) % n] for i in range(n)])
+
+
+def star(n):
+    return n, np.array([[0, i] for i in range(1, n)])
+
+
+def complete(n):
+    return n, np.array([[i, j] for i in range(n) for j in range(i + 1, n)])
+
+
+def two_paths(n):
+    """Two paths of n nodes, not joined: a graph of two components."""
+    edges = [[i, i + 1] for i in range(n - 1)] + [[n + i, n + i + 1] for i in range(n - 1)]
+    return 2 * n, np.array(edges)
+
+
+@pytest.fixture(scope="module")
+def graphs():
+    """Cycles, stars and complete graphs of 5 to 10 nodes, one class each."""
+    sizes = range(5, 11)
+    samples = [f(n) for f in (cycle, star, complete) for n in sizes]
+    return samples, np.repeat([0, 1, 2], len(sizes))
+
+
+def eigen():
+    return LaplacianEigenTransformer(
+        laplacian="normalized",
+        normalization="none",
+        components="all",
+        signature="hks",
+        times=(0.1, 10.0),
+    )
+
+
+def test_classifier_separates_cycles_stars_complete_graphs(graphs):
+    X, y = graphs
+    model = make_graph_classifier(n_estimators=20).fit(X, y)
+    assert model.score(X, y) == 1.0
+    assert model.predict([cycle(13), star(13), complete(12)]).tolist() == [0, 1, 2]
+
+
+def test_classifier_clone_pickle_params(graphs):
+    X, y = graphs
+    model = make_graph_classifier(n_estimators=10, random_state=3)
+    params = model.get_params()
+    assert params["classifier__n_estimators"] == 10
+    assert params["eigen__laplacian"] == "normalized"
+    assert params["features__diagrams__persistence__filtration"] == "extended"
+    assert clone(model).get_params()["classifier__random_state"] == 3
+    model.fit(X, y)
+    again = pickle.loads(pickle.dumps(model))
+    np.testing.assert_array_equal(again.predict_proba(X), model.predict_proba(X))
+
+
+def test_classifier_grid_search_over_a_step_parameter(graphs):
+    X, y = graphs
+    search = GridSearchCV(
+        make_graph_classifier(n_estimators=10),
+        {"features__graph__n_bins": [5, 10]},
+        cv=KFold(3, shuffle=True, random_state=0),
+    ).fit(X, y)
+    assert search.best_params_["features__graph__n_bins"] in (5, 10)
+    assert search.best_estimator_.named_steps["features"].get_params()["graph__n_bins"] in (5, 10)
+
+
+def test_classifier_same_for_any_n_jobs(graphs):
+    X, y = graphs
+    one = make_graph_classifier(n_estimators=10, n_jobs=1).fit(X, y).predict_proba(X)
+    two = make_graph_classifier(n_estimators=10, n_jobs=2).fit(X, y).predict_proba(X)
+    np.testing.assert_array_equal(one, two)
+
+
+def test_classifier_refuses_bad_parameters():
+    with pytest.raises(ValueError, match="n_estimators"):
+        make_graph_classifier(n_estimators=0)
+    with pytest.raises(ValueError, match="memory"):
+        make_graph_classifier(memory="")
+
+
+def test_graph_features_of_known_graphs():
+    fields = eigen().fit_transform([cycle(6), complete(4), two_paths(3)])
+    features = GraphFeatures().fit(fields)
+    names = list(features.get_feature_names_out())
+    X = features.transform(fields)
+    assert X.shape == (3, features.n_features_out_) == (3, len(names))
+    row = dict(zip(names, X[0], strict=True))
+    assert (row["n_nodes"], row["n_edges"], row["n_components"], row["n_cycles"]) == (6, 6, 1, 1)
+    assert row["n_triangles"] == 0 and row["hops_3"] == pytest.approx(3 / 15)
+    k4 = dict(zip(names, X[1], strict=True))
+    assert (k4["n_triangles"], k4["transitivity"], k4["hops_1"]) == (4, 1.0, 1.0)
+    # K4's normalized Laplacian: 0 once, 4/3 three times
+    assert k4["zero_eigenvalues"] == 1 and k4["eigenvalue_max"] == pytest.approx(4 / 3)
+    paths = dict(zip(names, X[2], strict=True))
+    assert paths["n_components"] == 2 and paths["zero_eigenvalues"] == 2
+    # 15 pairs, 9 across the two paths
+    assert paths["unreachable_pairs"] == pytest.approx(9 / 15)
+    harmonic = [paths[f"harmonic_{k}"] for k in range(30)]
+    assert sum(harmonic) == pytest.approx(6 / 15)
+
+
+def test_graph_features_without_pairs_and_the_signature_quantiles():
+    fields = eigen().fit_transform([cycle(7), star(7)])
+    X = GraphFeatures(pairs=False).fit_transform(fields)
+    names = list(GraphFeatures(pairs=False).fit(fields).get_feature_names_out())
+    assert not any(name.startswith("hops") for name in names)
+    row = dict(zip(names, X[0], strict=True))
+    values = fields[0].values[:, 1]
+    assert row["signature1_q0.5"] == pytest.approx(np.median(values))
+    assert row["signature1_q1"] == pytest.approx(values.max())
+
+
+def test_graph_features_refuse_non_graph_fields_naming_the_sample():
+    fields = eigen().fit_transform([cycle(5)])
+    tetra = ScalarField(
+        np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+        np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
+        np.arange(4.0),
+    )
+    with pytest.raises(TypeError, match="sample 1: GraphFeatures reads the graph fields"):
+        GraphFeatures().fit([fields[0], tetra])
+    with pytest.raises(TypeError, match="sample 0: .*got ndarray"):
+        GraphFeatures().fit([np.zeros((3, 2))])
+    other = LaplacianEigenTransformer(
+        laplacian="normalized", normalization="none", signature="hks", times=(1.0,)
+    ).fit_transform([cycle(5)])
+    with pytest.raises(ValueError, match="sample 0: 1 signature columns, the fitted fields have 2"):
+        GraphFeatures().fit(fields).transform(other)
+
+
+def test_graph_preset_gives_a_distance_matrix(graphs):
+    X, _ = graphs
+    matrix = make_mesh_distance("graph").fit_transform(X)
+    assert matrix.shape == (len(X), len(X))
+    np.testing.assert_allclose(matrix, matrix.T, atol=1e-9)
+    np.testing.assert_allclose(np.diag(matrix), 0.0, atol=1e-9)
+    assert (matrix[np.triu_indices(len(X), 1)] > 0).mean() > 0.9
+
+
+def test_mutag_accuracy_floor():
+    """A quick CV on MUTAG (structure only) reaches a sane accuracy."""
+    graphs, y = load_tu_dataset(data_folder("tu/MUTAG", "TU MUTAG"))
+    model = make_graph_classifier(n_estimators=100)
+    features = model[:-1].fit_transform(graphs)
+    scores = cross_val_score(model[-1], features, y, cv=KFold(5, shuffle=True, random_state=0))
+    assert scores.mean() > 0.8
