@@ -19,9 +19,9 @@ eigenvalues are compared with the surface's directly. Per shape, size and operat
   (barycentric, in the triangle each point was drawn from), and the span of the
   cloud's, in the cloud's mass inner product (1: the same subspace);
 - with ``--diagrams``: the largest bottleneck distance, over the default's log-HKS
-  columns and its ``ord1`` and ``ext0`` diagrams, between the cloud's and the mesh's
-  extended persistence (the eigen stage of ``make_mesh_distance()``), relative to the
-  column's range on the mesh;
+  columns and their ordinary H0, superlevel H0 and ``(min, max)`` diagrams, between
+  the cloud's and the mesh's extended persistence (the eigen stage of
+  ``make_mesh_distance()``), relative to the range of the mesh's values;
 - ``build s``: the operator's build time; ``peak MB``: the memory it allocates
   (tracemalloc, NumPy and numba arrays) in a second build.
 
@@ -159,16 +159,16 @@ class Diagrams:
         field = self.eigen.fit_transform([sample])[0]
         diagrams = self.persistence.fit_transform([field])[0]
         per_function = len(diagrams) // field.values.shape[1]
-        return diagrams, np.ptp(field.values, axis=0), per_function
+        return diagrams, np.ptp(field.values), per_function
 
     @staticmethod
     def distance(mesh, cloud):
         """The largest bottleneck distance over the columns' H0, superlevel H0 and
-        (min, max) diagrams, relative to the column's range on the mesh."""
-        (mesh_diagrams, ranges, per_function), (cloud_diagrams, _, _) = mesh, cloud
+        (min, max) diagrams, relative to the range of the mesh's values (all columns:
+        the last log-HKS column is nearly constant)."""
+        (mesh_diagrams, spread, per_function), (cloud_diagrams, _, _) = mesh, cloud
         return max(
-            float(bottleneck_distance(mesh_diagrams[i], cloud_diagrams[i]))
-            / ranges[i // per_function]
+            float(bottleneck_distance(mesh_diagrams[i], cloud_diagrams[i])) / spread
             for i in range(len(mesh_diagrams))
             if i % per_function < 3
         )

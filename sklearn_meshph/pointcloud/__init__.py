@@ -8,8 +8,10 @@
   canonical point order;
 - :mod:`.laplacians`: ``point_cloud_laplacian`` (local Delaunay cotangent) and the
   registry ``CLOUD_LAPLACIANS``, one discretization per name of ``LAPLACIANS``;
-- :mod:`.graph`: the symmetric kNN graph that lower-star persistence filters;
-- :mod:`._triangulation`: compiled local Delaunay triangulations.
+- :mod:`.graph`: the edges of the operator's local triangles that lower-star
+  persistence filters, and the symmetric kNN graph (the ``"graph"`` Laplacians');
+- :mod:`._triangulation`: each point's neighbours on its own sheet of the surface, its
+  tangent frame, and compiled local Delaunay triangulations.
 """
 
 # Only what the mesh layer needs here: the Laplacians build on the spectral stage,

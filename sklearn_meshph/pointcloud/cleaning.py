@@ -88,8 +88,8 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
        its own operator; ties: the lowest), ``"error"`` raises;
     3. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
        the kept points in the unit box;
-    4. points in no local triangle (zero mass: all their neighbours on a line) are
-       dropped as unreferenced;
+    4. points in no local triangle (zero mass: their neighbours on their own sheet too
+       few or on a line) are dropped as unreferenced;
     5. connected components of the operator (clusters that no local triangle joins)
        follow ``components`` as in step 2.
 

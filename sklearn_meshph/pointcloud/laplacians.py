@@ -52,7 +52,8 @@ def point_cloud_laplacian(
         Symmetric positive semi-definite stiffness, rows summing to zero.
     M : scipy.sparse.dia_matrix of shape (n, n)
         Diagonal lumped mass; its sum estimates the surface's area. A point in no
-        triangle (all its neighbours on a line) has zero mass and no stiffness.
+        triangle (its neighbours on its own sheet too few or on a line) has zero mass
+        and no stiffness.
 
     Notes
     -----
