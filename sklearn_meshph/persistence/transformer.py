@@ -64,8 +64,8 @@ def _graph_edges(edges):
 def _complex(arrays, entry, keep):
     """Adjacency and closed surface (``surface`` of :func:`function_diagrams`) of a
     sample's arrays. Essential H1 of a mesh needs a closed surface of triangles; a point
-    cloud has none (its kNN graph's cycles are artefacts of the neighbourhood size), a
-    graph's cycles go through :func:`.graph_extended.batch_diagrams`."""
+    cloud has none (the cycles of its local triangles' edges are artefacts of the
+    sampling), a graph's cycles go through :func:`.graph_extended.batch_diagrams`."""
     faces, edges, n_vertices, _, is_graph = arrays
     if is_graph:
         return edge_adjacency(_graph_edges(edges), n_vertices), None
