@@ -201,8 +201,14 @@ def test_bad_input_is_named():
     square = (4, np.array([[0, 1], [1, 2], [2, 3], [0, 3]]))
     with pytest.raises(ValueError, match=r"shape \(4,\)"):
         extended_persistence(square, [0.0, 1.0, 2.0])
-    with pytest.raises(ValueError, match="NaN or inf"):
+    with pytest.raises(ValueError, match="graph: values contain NaN or inf"):
         extended_persistence(square, [0.0, np.nan, 2.0, 1.0])
+    with pytest.raises(ValueError, match="graph: values contain NaN or inf"):
+        extended_persistence(square, [0.0, np.inf, -np.inf, 1.0])
+    with pytest.raises(ValueError, match="graph: values must be a numeric array"):
+        extended_persistence(square, ["a", "b", "c", "d"])
+    huge = extended_persistence(square, [1e308, 1e308, 0.0, 1e308])
+    np.testing.assert_array_equal(huge["ext1"], [[1e308, 0.0]])
     with pytest.raises(ValueError, match=r"values must have shape \(4,\), got \(4, 2\)"):
         extended_persistence(square, np.zeros((4, 2)))
     vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)

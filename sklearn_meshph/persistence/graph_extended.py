@@ -32,7 +32,7 @@ import numpy as np
 from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.graph import find_root
-from ..mesh.validation import check_values, where
+from ..mesh.validation import check_values
 from .extended import rooted_forest
 from .lower_star import elder_merge
 
@@ -167,6 +167,8 @@ def _root_path_labels(n_nodes, edges, in_forest, bit_of, words):
 def _cycle_pairs(values, edges, up_positive, down_positive, down_forest):
     """Ext1 as (ascending edge, descending edge) index pairs (see the module's notes)."""
     k = len(up_positive)
+    if k == 0:  # a forest
+        return np.empty((0, 2), dtype=np.int64)
     words = (k + 63) // 64
     bit_of = np.full(len(edges), -1, dtype=np.int64)
     for i in range(k):
@@ -226,13 +228,18 @@ def _graph_diagrams(n_nodes, edges, values, min_persistence):
     )
     ord0 = _kept(values, up_births, up_deaths, min_persistence)
     rel1 = _kept(values, down_births, down_deaths, min_persistence)
-    # ext0: the ascending roots are the components' minima; their highest nodes are the
-    # last of each component in ascending order
+    # ext0: the ascending roots are the components' minima (in ascending order), their
+    # highest nodes the last of each component
     top = np.empty(n_nodes, dtype=np.int64)
+    roots = np.empty(n_nodes, dtype=np.int64)
+    n_roots = 0
     for v in order:
-        top[find_root(up_parent, v)] = v
-    roots = order[up_parent[order] == order]
-    ext0 = _kept(values, roots, top[roots], min_persistence)
+        root = find_root(up_parent, v)
+        top[root] = v
+        if root == v:
+            roots[n_roots] = v
+            n_roots += 1
+    ext0 = _kept(values, roots[:n_roots], top[roots[:n_roots]], min_persistence)
     # ext1: each pair (ascending edge, descending edge) as (its upper, its lower node)
     pairs = _cycle_pairs(values, edges, up_positive, down_positive, down_forest)
     for i in range(len(pairs)):
@@ -325,6 +332,29 @@ def batch_diagrams(
     return out
 
 
+@numba.njit(cache=True)
+def _all_finite(values):
+    for value in values:
+        if not np.isfinite(value):
+            return False
+    return True
+
+
+def _node_values(values, n_nodes: int) -> np.ndarray:
+    """``values`` as a contiguous finite float64 ``(n_nodes,)`` array, or the error of
+    :func:`~sklearn_meshph.mesh.validation.check_values` (with less overhead: graphs are
+    small)."""
+    try:
+        array = np.ascontiguousarray(values, dtype=np.float64)
+    except (ValueError, TypeError):
+        return check_values(values, n_nodes, "graph")  # raises, naming the problem
+    if array.shape != (n_nodes,):
+        raise ValueError(f"values must have shape ({n_nodes},), got {array.shape}")
+    if not _all_finite(array):
+        raise ValueError("graph: values contain NaN or inf")
+    return array
+
+
 def extended_persistence(sample, values) -> dict[str, np.ndarray]:
     """The four extended persistence diagrams of a function on a graph's nodes.
 
@@ -395,8 +425,6 @@ def extended_persistence(sample, values) -> dict[str, np.ndarray]:
             "sparse adjacency or a networkx graph); for a mesh or a point cloud use "
             "LowerStarPersistence(filtration='extended')"
         )
-    values = check_values(values, graph.n_nodes, where(None))
-    if values.ndim != 1:
-        raise ValueError(f"values must have shape ({graph.n_nodes},), got {values.shape}")
-    diagrams = _graph_diagrams(graph.n_nodes, graph.edges, np.ascontiguousarray(values), 0.0)
+    values = _node_values(values, graph.n_nodes)
+    diagrams = _graph_diagrams(graph.n_nodes, graph.edges, values, 0.0)
     return dict(zip(GRAPH_DIAGRAMS, diagrams, strict=True))
