@@ -5,6 +5,10 @@ with ``(mesh, values)`` pairs, ``laplacian_eigenfunctions``, ``lower_star_persis
 calls :func:`check_input`, which reads a path first, then asks :data:`KINDS` in turn
 which kind the sample is and validates it as that kind:
 
+- a **graph** is a :class:`~sklearn_meshph.Graph`, an ``(n_nodes, edges)`` pair (an
+  integer first), a scipy sparse adjacency matrix or a networkx graph; it is checked by
+  :func:`~sklearn_meshph.check_graph` and returned as ``(Graph, None)``: callers test
+  for a ``Graph`` before reading ``faces is None`` as a point cloud;
 - a **point cloud** is a NumPy array (a mesh is never one array), a
   ``trimesh.PointCloud``, any object with ``vertices`` and no ``faces``, or a file
   holding points without triangles (``.xyz``, ``.pts``, a PLY without faces);
@@ -12,8 +16,8 @@ which kind the sample is and validates it as that kind:
   ``(vertices, faces)`` pair or a mesh file.
 
 A nested list of points is not a cloud: a list of two points would read as a
-``(vertices, faces)`` pair; pass ``np.asarray(points)``. A new kind of sample (graphs,
-for example) is a reader for its files in its own package, one :class:`InputKind` in
+``(vertices, faces)`` pair; pass ``np.asarray(points)``. A new kind of sample is a
+reader for its files in its own package, one :class:`InputKind` in
 :data:`KINDS` (the test that recognises it and the validator that returns its arrays),
 and its solve in the eigen stage.
 """
@@ -84,7 +88,8 @@ def _kind_of(sample, index) -> InputKind:
             return kind
     raise TypeError(
         f"{where(index)}: expected a trimesh.Trimesh, a (vertices, faces) pair or a "
-        "path, or a point cloud (an (n, 3) array or a trimesh.PointCloud), got "
+        "path, a point cloud (an (n, 3) array or a trimesh.PointCloud), or a graph (a "
+        "Graph, an (n_nodes, edges) pair, a sparse adjacency or a networkx graph), got "
         f"{type(sample).__name__}"
     )
 
@@ -96,7 +101,8 @@ def sample_kind(sample, *, index: int | None = None) -> str:
 
 
 def check_input(sample, *, index: int | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-    """A mesh as ``(vertices, faces)``, or a point cloud as ``(points, None)``.
+    """A mesh as ``(vertices, faces)``, a point cloud as ``(points, None)``, or a graph
+    as ``(Graph, None)``.
 
     Paths are read first (:func:`sklearn_meshph.pointcloud.reading.read_sample_file`):
     a file without triangles is a point cloud. Meshes are validated by
