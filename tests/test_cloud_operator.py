@@ -67,7 +67,7 @@ def test_a_thin_cylinder_keeps_its_area_and_spectrum():
 
 def test_the_far_side_of_a_thin_part_is_not_a_surface_neighbour():
     points, _, _ = hairpin(1500, gap=0.08)
-    neighbors, _, usable, normal, _ = surface_neighbours(points)
+    neighbors, usable, normal, _ = surface_neighbours(points)
     flat = np.abs(points[:, 0]) > 0.2  # on the arms, away from the fold
     upper = points[:, 2] > 0.04
     across = (upper[neighbors] != upper[:, None]) & flat[:, None]

@@ -18,6 +18,7 @@ __all__ = [
     "MAX_SLOPE",
     "MIN_NORMAL_COSINE",
     "NORMAL_NEIGHBORS",
+    "BLOCK",
     "local_delaunay_fans",
     "nearest",
     "surface_neighbours",
@@ -40,6 +41,9 @@ MAX_SLOPE = 0.7
 #: Surface neighbours have tangent planes within 60 degrees of each other (unoriented
 #: normals: the absolute cosine).
 MIN_NORMAL_COSINE = 0.5
+
+#: Points whose local frames are computed together.
+BLOCK = 4096
 
 
 def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarray]:
@@ -73,6 +77,17 @@ def _flat(relative, normal, reach):
     return np.abs(_along(relative, normal)) <= MAX_SLOPE * reach
 
 
+def _blocks(n):
+    """Slices of at most :data:`BLOCK` points: the local frames of a block are computed
+    together, which bounds the temporary arrays (every point's result is the same)."""
+    return (slice(start, min(start + BLOCK, n)) for start in range(0, n, BLOCK))
+
+
+def _relative(points, neighbors, block):
+    """Positions ``(b, k, 3)`` of the block's neighbours relative to each point."""
+    return points[neighbors[block]] - points[block][:, None, :]
+
+
 def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     """Each point's nearest neighbours, which of them are on its own sheet, and its frame.
 
@@ -84,21 +99,27 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     neighbours kept are those low over that plane and whose own normal is within
     :data:`MIN_NORMAL_COSINE` of the point's.
 
-    Returns ``(neighbors, relative, usable, normal, basis)``: indices ``(n, k)``,
-    positions relative to the point ``(n, k, 3)``, the mask of the neighbours kept
-    ``(n, k)``, unit normals ``(n, 3)`` and tangent bases ``(n, 3, 2)``.
+    Returns ``(neighbors, usable, normal, basis)``: indices ``(n, k)``, the mask of the
+    neighbours kept ``(n, k)``, unit normals ``(n, 3)`` and tangent bases
+    ``(n, 3, 2)``.
     """
     distances, neighbors = nearest(points, n_neighbors)
-    relative = points[neighbors] - points[:, None, :]
-    first = min(NORMAL_NEIGHBORS, neighbors.shape[1])
+    n, k = neighbors.shape
+    first = min(NORMAL_NEIGHBORS, k)
     reach = np.maximum(distances, distances[:, first - 1 : first])
-    nearest_ones = np.zeros(neighbors.shape)
+    nearest_ones = np.zeros((1, k))
     nearest_ones[:, :first] = 1.0
-    normal, _ = _frames(relative, nearest_ones)
-    normal, basis = _frames(relative, _flat(relative, normal, reach).astype(np.float64))
-    agree = np.abs(_along(normal[neighbors], normal)) >= MIN_NORMAL_COSINE
-    usable = _flat(relative, normal, reach) & agree
-    return neighbors, relative, usable, normal, basis
+    normal, basis = np.empty((n, 3)), np.empty((n, 3, 2))
+    for block in _blocks(n):
+        relative = _relative(points, neighbors, block)
+        flat = _flat(relative, _frames(relative, nearest_ones)[0], reach[block])
+        normal[block], basis[block] = _frames(relative, flat.astype(np.float64))
+    usable = np.empty((n, k), dtype=bool)
+    for block in _blocks(n):
+        agree = np.abs(_along(normal[neighbors[block]], normal[block])) >= MIN_NORMAL_COSINE
+        flat = _flat(_relative(points, neighbors, block), normal[block], reach[block])
+        usable[block] = flat & agree
+    return neighbors, usable, normal, basis
 
 
 def _heights(coords, height, usable, unit):
@@ -136,10 +157,15 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     :data:`sklearn_meshph.mesh.DEGENERATE_SINE` times the longest edge squared) are
     dropped. ``points`` must be distinct.
     """
-    neighbors, relative, usable, normal, basis = surface_neighbours(points, n_neighbors)
-    coords = np.ascontiguousarray(np.matmul(relative, basis))
-    unit = np.linalg.norm(relative[:, min(NORMAL_NEIGHBORS, neighbors.shape[1]) - 1], axis=1)
-    lift = _heights(coords, _along(relative, normal), usable, unit[:, None])
+    neighbors, usable, normal, basis = surface_neighbours(points, n_neighbors)
+    n, k = neighbors.shape
+    coords, lift = np.empty((n, k, 2)), np.empty((n, k))
+    for block in _blocks(n):
+        relative = _relative(points, neighbors, block)
+        coords[block] = np.matmul(relative, basis[block])
+        unit = np.linalg.norm(relative[:, min(NORMAL_NEIGHBORS, k) - 1], axis=1)[:, None]
+        height = _along(relative, normal[block])
+        lift[block] = _heights(coords[block], height, usable[block], unit)
     fans = local_delaunay_fans(coords, usable)
     i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
     a = np.column_stack([coords[i, ja], lift[i, ja]])
