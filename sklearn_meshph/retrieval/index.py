@@ -189,12 +189,12 @@ class _ShapeIndex(BaseEstimator):
         n_finite = int(np.sum(np.isfinite(lower[order])))
         safe = lower[order[:n_finite]] * (1.0 - SLACK)
         distances, indices = [], []
-        done, batch = 0, max(8, 2 * k)
+        done, batch = 0, max(8, 2 * k)  # batches of one size: little computed in vain
         while done < n_finite:
             cols = order[done : done + batch]
             distances.append(self._exact(query, cols)[0])
             indices.append(cols)
-            done, batch = done + len(cols), batch + batch // 2
+            done += len(cols)
             if done >= k and done < n_finite:
                 kth = np.partition(np.concatenate(distances), k - 1)[k - 1]
                 if safe[done] > kth:
