@@ -118,21 +118,23 @@ def _sweep(order, indptr, incident, edges):
     births = np.empty(n, dtype=np.int64)
     deaths = np.empty(n, dtype=np.int64)
     n_pairs = n_positive = 0
-    for r, v in enumerate(order):
+    # index loops, not slices: a slice of an array is a reference to count in each turn
+    for r in range(n):
+        v = order[r]
         root_v = v
-        for e in incident[indptr[v] : indptr[v + 1]]:
+        for k in range(indptr[v], indptr[v + 1]):
+            e = incident[k]
             u = edges[e, 0] + edges[e, 1] - v
-            if position[u] > r:
-                continue
-            root_u = find_root(parent, u)
-            if root_u == root_v:
-                positive[n_positive] = e
-                n_positive += 1
-                continue
-            in_forest[e] = True
-            root_v, n_pairs = elder_merge(
-                parent, position, root_u, root_v, v, births, deaths, n_pairs
-            )
+            if position[u] < r:
+                root_u = find_root(parent, u)
+                if root_u == root_v:
+                    positive[n_positive] = e
+                    n_positive += 1
+                else:
+                    in_forest[e] = True
+                    root_v, n_pairs = elder_merge(
+                        parent, position, root_u, root_v, v, births, deaths, n_pairs
+                    )
     return births[:n_pairs], deaths[:n_pairs], parent, in_forest, positive[:n_positive]
 
 
@@ -157,7 +159,8 @@ def _root_path_labels(n_nodes, edges, in_forest, bit_of, words):
         e = parent_edge[b]
         if e < 0:
             continue
-        labels[b] = labels[parent[b]]
+        for w in range(words):
+            labels[b, w] = labels[parent[b], w]
         if bit_of[e] >= 0:
             labels[b, bit_of[e] // 64] ^= np.uint64(1) << np.uint64(bit_of[e] % 64)
     return labels
@@ -177,7 +180,8 @@ def _cycle_pairs(values, edges, up_positive, down_positive, down_forest):
     columns = np.empty((len(down_positive), words), dtype=np.uint64)
     for j in range(len(down_positive)):
         e = down_positive[j]
-        columns[j] = labels[edges[e, 0]] ^ labels[edges[e, 1]]
+        for w in range(words):
+            columns[j, w] = labels[edges[e, 0], w] ^ labels[edges[e, 1], w]
         if bit_of[e] >= 0:
             columns[j, bit_of[e] // 64] ^= np.uint64(1) << np.uint64(bit_of[e] % 64)
     owner = np.full(k, -1, dtype=np.int64)
@@ -192,7 +196,8 @@ def _cycle_pairs(values, edges, up_positive, down_positive, down_forest):
                     break
             if low < 0 or owner[low] < 0:
                 break
-            columns[j] ^= columns[owner[low]]
+            for w in range(words):
+                columns[j, w] ^= columns[owner[low], w]
         if low >= 0:
             owner[low] = j
             pairs[n_pairs, 0] = up_positive[low]

@@ -15,7 +15,7 @@ from ..pointcloud.graph import edge_adjacency, surface_graph
 __all__ = ["elder_merge", "lower_star_persistence", "sublevel_h0"]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def elder_merge(parent, rank, root_u, root_v, v, births, deaths, n_pairs):
     """Join the components of roots ``root_u != root_v`` at vertex ``v`` by the elder
     rule: the root of larger ``rank`` dies at ``v``, recorded in ``births`` and
