@@ -41,12 +41,11 @@ _GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
 _GRAPH_TREES = 300
 
 
-def _default(common):
-    eigen = LaplacianEigenTransformer(
-        signature="log-hks", n_eigenpairs=_EIGENPAIRS, n_scales=_SCALES, **common["eigen"]
-    )
+def _kind_distances(kinds, common):
+    """One part per extended diagram kind: its persistence, then W1 (Euclidean ground
+    metric) between the samples, median-normalized."""
     n_jobs, verbose = common["n_jobs"], common["verbose"]
-    parts = [
+    return [
         (
             kind,
             Pipeline(
@@ -71,15 +70,22 @@ def _default(common):
                 ]
             ),
         )
-        for kind in _KINDS
+        for kind in kinds
     ]
+
+
+def _default(common):
+    eigen = LaplacianEigenTransformer(
+        signature="log-hks", n_eigenpairs=_EIGENPAIRS, n_scales=_SCALES, **common["eigen"]
+    )
+    parts = _kind_distances(_KINDS, common)
     parts.append(
         (
             "dna",
             Pipeline(
                 [
                     ("spectrum", ShapeDNA(n_eigenpairs=_DNA_EIGENPAIRS)),
-                    ("distance", FeatureDistance(metric="canberra", n_jobs=n_jobs)),
+                    ("distance", FeatureDistance(metric="canberra", n_jobs=common["n_jobs"])),
                 ]
             ),
         )
@@ -134,33 +140,11 @@ def _graph_eigen(eigen, times=_GRAPH_TIMES):
 
 
 def _graph(common):
-    n_jobs, verbose = common["n_jobs"], common["verbose"]
-    parts = [
-        (
-            kind,
-            Pipeline(
-                [
-                    (
-                        "persistence",
-                        LowerStarPersistence(
-                            filtration="extended", parts=(kind,), n_jobs=n_jobs, verbose=verbose
-                        ),
-                    ),
-                    (
-                        "distance",
-                        DiagramDistance(
-                            metric="wasserstein", order=1.0, n_jobs=n_jobs, verbose=verbose
-                        ),
-                    ),
-                ]
-            ),
-        )
-        for kind in _GRAPH_KINDS
-    ]
+    parts = _kind_distances(_GRAPH_KINDS, common)
     features = Pipeline(
         [
             ("graph", GraphFeatures()),
-            ("distance", FeatureDistance(metric="canberra", n_jobs=n_jobs)),
+            ("distance", FeatureDistance(metric="canberra", n_jobs=common["n_jobs"])),
         ]
     )
     return _graph_eigen(common["eigen"]), CombinedDistance([*parts, ("features", features)])

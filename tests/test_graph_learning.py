@@ -151,8 +151,12 @@ def test_graph_features_refuse_non_graph_fields_naming_the_sample():
 
 def test_graph_preset_gives_a_distance_matrix(graphs):
     X, _ = graphs
-    matrix = make_mesh_distance("graph").fit_transform(X)
+    pipe = make_mesh_distance("graph")
+    matrix = pipe.fit_transform(X)
     assert matrix.shape == (len(X), len(X))
+    restored = pickle.loads(pickle.dumps(pipe))
+    np.testing.assert_array_equal(restored.transform(X[:3]), pipe.transform(X[:3]))
+    np.testing.assert_array_equal(clone(pipe).fit_transform(X), matrix)
     np.testing.assert_allclose(matrix, matrix.T, atol=1e-9)
     np.testing.assert_allclose(np.diag(matrix), 0.0, atol=1e-9)
     assert (matrix[np.triu_indices(len(X), 1)] > 0).mean() > 0.9

@@ -74,7 +74,7 @@ def test_the_eigenfunctions_and_paper_presets_are_the_estimators_they_name(shape
 
 def test_every_preset_fits_clones_and_pickles(shapes):
     meshes, _ = shapes
-    for preset in PRESETS:
+    for preset in [p for p in PRESETS if p != "graph"]:  # graphs: test_graph_learning.py
         pipe = make_mesh_distance(preset, random_state=0)
         assert [name for name, _ in pipe.steps] == ["eigen", "distance"]
         twin = clone(pipe)
