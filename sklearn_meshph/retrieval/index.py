@@ -475,6 +475,21 @@ class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
         counts = np.stack([np.sum(votes == c, axis=1) for c in range(len(self.classes_))], 1)
         return counts / indices.shape[1]
 
+    def score(self, X, y, sample_weight=None):
+        """The accuracy of :meth:`predict` on ``X`` (scikit-learn's ``accuracy_score``).
+
+        Parameters
+        ----------
+        X : sequence of samples
+        y : array-like of shape (n_samples,)
+        sample_weight : array-like of shape (n_samples,), default=None
+
+        Returns
+        -------
+        float
+        """
+        return super().score(X, y, sample_weight=sample_weight)
+
     def predict(self, X):
         """The class most neighbours of each sample belong to.
 
