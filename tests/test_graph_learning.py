@@ -169,3 +169,18 @@ def test_mutag_accuracy_floor():
     features = model[:-1].fit_transform(graphs)
     scores = cross_val_score(model[-1], features, y, cv=KFold(5, shuffle=True, random_state=0))
     assert scores.mean() > 0.8
+
+
+def test_graph_features_refuse_pair_histograms_of_huge_graphs():
+    n = 4001
+    field = ScalarField(
+        np.zeros((n, 0)),
+        np.zeros((0, 3), dtype=np.int64),
+        np.zeros((n, 2)),
+        spectrum=np.zeros(n),
+        edges=np.c_[np.arange(n - 1), np.arange(1, n)],
+    )
+    assert field.is_graph
+    with pytest.raises(ValueError, match="sample 0: 4001 nodes, more than the 4000 .*pairs=False"):
+        GraphFeatures().fit([field])
+    assert GraphFeatures(pairs=False).fit_transform([field]).shape[0] == 1
