@@ -83,7 +83,9 @@ def test_check_input_decides_the_kind_of_every_sample(tmp_path):
         assert sample_kind(sample) == "mesh"
         np.testing.assert_array_equal(check_input(sample)[1], faces)
     assert [kind.name for kind in KINDS] == ["graph", "point cloud", "mesh"]
-    with pytest.raises(TypeError, match="sample 4: expected a trimesh.Trimesh.*point cloud.*or a graph"):
+    with pytest.raises(
+        TypeError, match="sample 4: expected a trimesh.Trimesh.*point cloud.*or a graph"
+    ):
         check_input(42, index=4)
     with pytest.raises(ValueError, match="sample 1: a point cloud needs at least 4 points"):
         check_input(vertices[:3], index=1)
