@@ -4,6 +4,7 @@ six shared datasets as their README describes them."""
 import csv
 import gzip
 import json
+import os
 import re
 
 import numpy as np
@@ -90,6 +91,17 @@ def test_other_folders_are_not_tu_datasets(tmp_path):
         load_tu_dataset(tmp_path / "a")
     with pytest.raises(ValueError, match="does not exist or is not a folder"):
         load_tu_dataset(tmp_path / "missing")
+
+
+def test_a_fifo_or_a_folder_in_place_of_a_tu_file_is_named_and_never_read(tmp_path):
+    write_tu(tmp_path, {part: text for part, text in TINY.items() if part != "graph_labels"})
+    os.mkfifo(tmp_path / "TINY_graph_labels.txt")  # reading it would block forever
+    with pytest.raises(ValueError, match=r"TINY_graph_labels.txt' .*is not a regular file"):
+        load_tu_dataset(tmp_path)
+    os.unlink(tmp_path / "TINY_graph_labels.txt")
+    (tmp_path / "TINY_graph_labels.txt").mkdir()
+    with pytest.raises(ValueError, match=r"TINY_graph_labels.txt' .*is not a regular file"):
+        load_tu_dataset(tmp_path)
 
 
 BAD_FILES = [

@@ -247,7 +247,9 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
         paths[part] = _find(folder, name, part)
         if paths[part] is None:
             expected = os.path.join(folder, f"{name}_{part}.txt")
-            raise ValueError(f"{place}: TU file {expected!r} (or .gz) does not exist")
+            raise ValueError(
+                f"{place}: TU file {expected!r} (or .gz) does not exist or is not a regular file"
+            )
     ids = _graph_ids(paths["graph_indicator"], place)
     n_graphs = int(ids[-1])
     y = _table(paths["graph_labels"], np.int64, 1, place)[:, 0]
