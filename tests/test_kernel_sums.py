@@ -371,6 +371,7 @@ def test_grid_search_computes_each_folds_distances_once(monkeypatch, tmp_path):
     assert len(search.cv_results_["params"]) == 6
     # Per fold, the training stack and the test stack; then the refit's: 2 positions each.
     assert len(calls) == 2 * (3 * 2 + 1)
+    assert len(list((tmp_path / "sklearn_meshph_distances").glob("*.npy"))) == 3 * 2 + 1
     assert search.best_score_ == 1.0
     # Without the cache, every candidate of every fold computes both again.
     calls.clear()

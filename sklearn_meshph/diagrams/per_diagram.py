@@ -5,10 +5,11 @@ without computing the distances again."""
 from __future__ import annotations
 
 import os
+from functools import partial
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.utils.validation import check_is_fitted, check_memory
+from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list
 from .._param_validation import HasMethods, Interval, Options
@@ -16,6 +17,7 @@ from .._version import VERSION
 from .distances import METRICS, kernel_metric
 from .estimator import DiagramTransformer
 from .pairwise import as_packed, distance_stack
+from .stack_cache import StackCache, stack_cache_of
 from .validation import pack_samples
 
 __all__ = ["PerDiagramDistance"]
@@ -50,7 +52,11 @@ class PerDiagramDistance(DiagramTransformer):
         bandwidths, the classifier's ``C``) then computes each fold's distances once,
         its training stack at the first candidate and its test stack at the first
         score, instead of once per candidate (a pipeline's own ``memory`` caches
-        ``fit_transform`` only). ``None``: no caching.
+        ``fit_transform`` only). A folder, or a ``joblib.Memory``'s location, holds
+        each stack as one ``.npy`` file in its ``sklearn_meshph_distances`` folder
+        (data only, checked on read; see :mod:`sklearn_meshph.diagrams.stack_cache`);
+        another object with a ``cache`` method is used as joblib's would be.
+        ``None``: no caching.
     n_jobs : int, default=None
         Number of parallel jobs (joblib). ``None`` means 1 unless in a
         :func:`joblib.parallel_backend` context; ``-1`` means all processors. Results
@@ -155,22 +161,30 @@ class PerDiagramDistance(DiagramTransformer):
         return self._stack(packed, as_packed(self.diagrams_))
 
     def _stack(self, left, right):
-        memory = os.fspath(self.memory) if isinstance(self.memory, os.PathLike) else self.memory
-        compute = check_memory(memory).cache(_stack, ignore=["n_jobs"])
-        return compute(
-            VERSION,
-            left,
-            right,
-            self.metric,
-            float(self.order),
-            float(self.internal_p),
-            int(self.n_directions),
-            np.dtype(self.dtype),
-            n_jobs=self.n_jobs,
+        settings = {
+            "metric": self.metric,
+            "order": float(self.order),
+            "internal_p": float(self.internal_p),
+            "n_directions": int(self.n_directions),
+            "dtype": np.dtype(self.dtype),
+        }
+        args = (left, right, *settings.values())
+        cache = stack_cache_of(self.memory)
+        if cache is None:
+            return distance_stack(*args, n_jobs=self.n_jobs)
+        if not isinstance(cache, StackCache):  # the user's own caching object
+            return cache.cache(_stack, ignore=["n_jobs"])(VERSION, *args, n_jobs=self.n_jobs)
+        sides = (left,) if right is None else (left, right)
+        key = cache.key(
+            [array for side in sides for array in (side.points, side.offsets)],
+            {**settings, "n_diagrams": left.n_diagrams, "symmetric": right is None},
         )
+        shape = (len(left), len(sides[-1]), left.n_diagrams)
+        compute = partial(distance_stack, *args, n_jobs=self.n_jobs)
+        return cache.stack(key, shape, settings["dtype"], compute)
 
 
 def _stack(version, left, right, *args, n_jobs=None):
-    """:func:`distance_stack`, with the package's ``version`` in the cache key: a stack
-    cached by another release is computed again."""
+    """:func:`distance_stack`, with the package's ``version`` in the key of the user's
+    caching object: a stack cached by another release is computed again."""
     return distance_stack(left, right, *args, n_jobs=n_jobs)

@@ -1,0 +1,172 @@
+"""PerDiagramDistance's cache of stacks is data only: one ``.npy`` file per stack, read
+only from a regular file of the expected dtype and shape, never unpickled nor blocked
+on; a tampered entry is recomputed (and replaced) with a CacheWarning."""
+
+import os
+import pickle
+
+import joblib
+import numpy as np
+import pytest
+
+from sklearn_meshph import PerDiagramDistance
+from sklearn_meshph.diagrams import pairwise, per_diagram
+from sklearn_meshph.spectral.cache import CacheWarning
+
+UNPICKLED = []
+
+
+def _mark():
+    UNPICKLED.append(True)
+
+
+class Hostile:
+    """Runs ``_mark`` when unpickled."""
+
+    def __reduce__(self):
+        return (_mark, ())
+
+
+def samples(n=5, seed=0):
+    rng = np.random.default_rng(seed)
+    result = []
+    for _ in range(n):
+        births = rng.random((2, 4))
+        result.append(tuple(np.column_stack([b, b + rng.random(4)]) for b in births))
+    return result
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """The stacks computed (each a distance matrix per diagram position)."""
+    counted = []
+
+    def counting(*args, **kwargs):
+        counted.append(len(args[0]))
+        return pairwise.distance_stack(*args, **kwargs)
+
+    monkeypatch.setattr(per_diagram, "distance_stack", counting)
+    return counted
+
+
+def entries(location):
+    return sorted((location / "sklearn_meshph_distances").iterdir())
+
+
+def test_a_stack_is_one_npy_file_and_read_again_without_computing(tmp_path, calls):
+    X, Y = samples(), samples(3, seed=1)
+    fresh = PerDiagramDistance(metric="bottleneck").fit(X)
+    expected, cross = fresh.fit_transform(X), fresh.transform(Y)
+    calls.clear()
+    stage = PerDiagramDistance(metric="bottleneck", memory=joblib.Memory(tmp_path, verbose=0))
+    assert np.array_equal(stage.fit_transform(X), expected)
+    assert np.array_equal(stage.transform(Y), cross)
+    assert len(calls) == 2
+    stored = entries(tmp_path)
+    assert [path.suffix for path in stored] == [".npy", ".npy"]
+    assert not list(tmp_path.rglob("*.pkl"))  # no pickle, no temporary file left
+    loaded = [np.load(path, allow_pickle=False) for path in stored]
+    assert sorted(a.shape for a in loaded) == [(3, 5, 2), (5, 5, 2)]
+    calls.clear()
+    again = PerDiagramDistance(metric="bottleneck", memory=str(tmp_path))
+    assert np.array_equal(again.fit_transform(X), expected)
+    assert np.array_equal(again.transform(Y), cross)
+    assert calls == []
+    # Another parameter, another entry; a joblib.Memory without location, no cache.
+    PerDiagramDistance(metric="bottleneck", internal_p=1.0, memory=tmp_path).fit_transform(X)
+    assert len(entries(tmp_path)) == 3
+    none = PerDiagramDistance(memory=joblib.Memory(None, verbose=0)).fit_transform(X)
+    assert none.shape == (5, 5, 2) and len(entries(tmp_path)) == 3
+
+
+def _pickle(path):
+    np.save(path, np.array([Hostile(), 1.0], dtype=object), allow_pickle=True)
+
+
+def _truncated(path):
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) - 8])
+
+
+def _wrong_shape(path):
+    np.save(path, np.zeros((5, 4, 2)))
+
+
+def _negative(path):
+    np.save(path, -np.ones((5, 5, 2)))
+
+
+def _fifo(path):
+    path.unlink()
+    os.mkfifo(path)
+
+
+def _folder(path):
+    path.unlink()
+    path.mkdir()
+    (path / "inside.npy").write_bytes(b"")
+
+
+def _link(path):
+    elsewhere = path.parent.parent / "elsewhere.npy"
+    os.replace(path, elsewhere)
+    path.symlink_to(elsewhere)
+
+
+@pytest.mark.parametrize(
+    "tamper", [_pickle, _truncated, _wrong_shape, _negative, _fifo, _folder, _link]
+)
+def test_a_tampered_entry_is_recomputed_with_a_warning(tmp_path, calls, tamper):
+    if tamper is _fifo and not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    X = samples()
+    expected = PerDiagramDistance().fit_transform(X)
+    stage = PerDiagramDistance(memory=tmp_path)
+    stage.fit_transform(X)
+    (entry,) = entries(tmp_path)
+    tamper(entry)
+    calls.clear()
+    UNPICKLED.clear()
+    with pytest.warns(CacheWarning, match="distance cache entry .* is unusable"):
+        assert np.array_equal(stage.fit_transform(X), expected)
+    assert UNPICKLED == [] and len(calls) == 1
+    # Replaced by a good entry: read without computing nor warning.
+    assert entry.is_file() and not entry.is_symlink()
+    calls.clear()
+    assert np.array_equal(stage.fit_transform(X), expected)
+    assert calls == []
+
+
+def test_the_pickle_of_the_hostile_object_would_run():
+    UNPICKLED.clear()
+    pickle.loads(pickle.dumps(Hostile()))
+    assert UNPICKLED == [True]
+
+
+@pytest.mark.parametrize("kind", ["file", "fifo"])
+def test_a_memory_path_that_is_not_a_folder_is_refused(tmp_path, kind):
+    if kind == "fifo" and not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    path = tmp_path / "memory"
+    path.write_bytes(b"") if kind == "file" else os.mkfifo(path)
+    with pytest.raises(ValueError, match="memory must be a folder.*'.*memory' is not a folder"):
+        PerDiagramDistance(memory=path).fit_transform(samples())
+    with pytest.raises(ValueError, match="memory must be a folder.*an empty path"):
+        PerDiagramDistance(memory="").fit_transform(samples())
+
+
+def test_a_caching_object_of_the_users_is_used_as_before(tmp_path):
+    cached = []
+
+    class Recorder:
+        def cache(self, function, ignore=None):
+            def call(*args, **kwargs):
+                cached.append(args[0])
+                return function(*args, **kwargs)
+
+            return call
+
+    X = samples()
+    result = PerDiagramDistance(memory=Recorder()).fit_transform(X)
+    assert np.array_equal(result, PerDiagramDistance().fit_transform(X))
+    assert len(cached) == 1
