@@ -67,6 +67,7 @@ def test_classifier_clone_pickle_params(graphs):
     params = model.get_params()
     assert params["classifier__n_estimators"] == 10
     assert params["eigen__laplacian"] == "normalized"
+    assert params["eigen__times"] == (0.1, 1.0, 10.0)  # PersLay's two and t = 1
     assert params["features__diagrams__persistence__filtration"] == "extended"
     assert clone(model).get_params()["classifier__random_state"] == 3
     model.fit(X, y)
