@@ -323,9 +323,9 @@ def make_graph_classifier(
     - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
       features of very different ranges and no tuning.
 
-    The graphs are read as unweighted structure: node labels or attributes are not
-    used. Nothing in it is tuned per dataset; ``docs/graphs.md`` has its accuracy under
-    PersLay's protocol on six TU datasets.
+    Edge weights enter the Laplacian only (:class:`GraphFeatures` reads the edges);
+    node labels or attributes are not used. Nothing in it is tuned per dataset;
+    ``docs/graphs.md`` has its accuracy under PersLay's protocol on six TU datasets.
 
     Parameters
     ----------
