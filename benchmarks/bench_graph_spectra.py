@@ -24,13 +24,12 @@ Timings depend on the machine and on its load: run it on a quiet machine.
 from __future__ import annotations
 
 import argparse
-import gzip
 import time
-from pathlib import Path
 
 import numpy as np
 from _common import DATA
 
+from sklearn_meshph import load_tu_dataset
 from sklearn_meshph.graph.validation import Graph
 from sklearn_meshph.spectral.eigensolver import generalized_eigenpairs
 from sklearn_meshph.spectral.laplacians import GRAPH_LAPLACIANS
@@ -80,29 +79,6 @@ def auto(L, M, k):
     return generalized_eigenpairs(L, M, k, dense_max=DENSE_MAX_NODES)
 
 
-def read_tu(folder: Path):
-    """The graphs of a TU folder (``DS_A.txt`` and ``DS_graph_indicator.txt``, plain or
-    gzip): only what this benchmark needs."""
-
-    def lines(stem):
-        for path in (folder / f"{folder.name}_{stem}.txt", folder / f"{folder.name}_{stem}.txt.gz"):
-            if path.exists():
-                opener = gzip.open if path.suffix == ".gz" else open
-                with opener(path, "rt") as stream:
-                    return stream.read().split("\n")
-        raise FileNotFoundError(folder / f"{folder.name}_{stem}.txt")
-
-    indicator = np.array([int(x) for x in lines("graph_indicator") if x.strip()]) - 1
-    pairs = np.array([[int(v) for v in x.split(",")] for x in lines("A") if x.strip()]) - 1
-    starts = np.searchsorted(indicator, np.arange(indicator.max() + 2))
-    owner = indicator[pairs[:, 0]]
-    graphs = []
-    for g in range(indicator.max() + 1):
-        local = pairs[owner == g] - starts[g]
-        graphs.append(_graph(int(starts[g + 1] - starts[g]), local))
-    return graphs
-
-
 def part_synthetic(sizes, ks, repeats):
     print("## Synthetic graphs: one graph's eigenpairs, best of", repeats, "(ms)\n")
     print("| kind | nodes | k | dense k | sparse k | dense, all |")
@@ -130,7 +106,7 @@ def part_tu(names, k, repeats):
         if not folder.is_dir():
             print(f"| {name} | missing: {folder} | | | | |")
             continue
-        operators = [operator(graph) for graph in read_tu(folder)]
+        operators = [operator(graph) for graph in load_tu_dataset(folder)[0]]
         big = [(L, M) for L, M in operators if L.shape[0] > k + 1]
         every = 1e3 * best_time(repeats, dense, operators, int) / len(operators)
         automatic = best_time(repeats, auto, operators, lambda n: min(k, n))
