@@ -199,7 +199,9 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     weights : dict of str to float, sequence of float or None, default=None
         Weight of each part, finite and non-negative: by name (missing parts weigh 1;
         a name that is not a part's is refused by ``fit``), or one per part in the
-        order of ``transformer_list``. ``None``: all 1.
+        order of ``transformer_list``. ``None``: all 1. A part of weight 0 is left
+        out of the sum (its infinite distances too; it is still fitted, so that a
+        weight set after ``fit`` stays ignored, like every parameter).
     normalization : {"median", "none"}, default="median"
         ``"median"`` divides each part by the median of its positive finite
         off-diagonal distances on the fitted samples, learned by ``fit``: parts measured
@@ -326,10 +328,10 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         return {name: float(w) for name, w in zip(names, weights, strict=True)}
 
     def _combine(self, matrices):
-        total = None
+        total = np.zeros(np.shape(matrices[0]))
         for (name, _), matrix in zip(self.parts_, matrices, strict=True):
-            term = self.weights_[name] / self.scales_[name] * np.asarray(matrix, float)
-            total = term if total is None else total + term
+            if self.weights_[name] > 0:  # 0 * inf would be NaN: a weight-0 part is left out
+                total += self.weights_[name] / self.scales_[name] * np.asarray(matrix, float)
         return total
 
     def fit_transform(self, X, y=None):

@@ -151,6 +151,37 @@ def test_weights_by_name_or_one_per_part():
     np.testing.assert_allclose(zero, alone, rtol=1e-12)
 
 
+class _FarApart(FeatureDistance):
+    """Euclidean distances, infinite between samples on either side of 0.5 in the first
+    feature (as diagrams with different numbers of essential points)."""
+
+    def _far(self, D, X, Y):
+        side = lambda Z: np.asarray(Z)[:, 0] > 0.5  # noqa: E731
+        return np.where(side(X)[:, None] != side(Y)[None, :], np.inf, D)
+
+    def fit_transform(self, X, y=None):
+        self._fitted = np.asarray(X)
+        return self._far(super().fit_transform(X), X, X)
+
+    def transform(self, X):
+        return self._far(super().transform(X), X, self._fitted)
+
+
+def test_a_part_of_weight_zero_is_left_out_even_where_infinite():
+    X = np.random.default_rng(3).random((8, 3))
+    parts = [
+        ("far", _FarApart(metric="euclidean")),
+        ("cityblock", FeatureDistance(metric="cityblock")),
+    ]
+    assert np.isinf(parts[0][1].fit_transform(X)).any()
+    zero = CombinedDistance(parts, weights={"far": 0.0})
+    alone = CombinedDistance(parts[1:])
+    np.testing.assert_array_equal(zero.fit_transform(X), alone.fit_transform(X))
+    np.testing.assert_array_equal(zero.transform(X[:3]), alone.transform(X[:3]))
+    everything_off = CombinedDistance(parts, weights=[0.0, 0.0]).fit_transform(X)
+    np.testing.assert_array_equal(everything_off, np.zeros((8, 8)))
+
+
 def test_transform_reads_the_fitted_parts_and_weights():
     X = np.random.default_rng(2).random((8, 3))
     combined = CombinedDistance(vector_parts(), weights={"cityblock": 2.0}).fit(X[:6])
