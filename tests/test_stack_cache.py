@@ -170,3 +170,28 @@ def test_a_caching_object_of_the_users_is_used_as_before(tmp_path):
     result = PerDiagramDistance(memory=Recorder()).fit_transform(X)
     assert np.array_equal(result, PerDiagramDistance().fit_transform(X))
     assert len(cached) == 1
+
+
+def test_temporary_files_of_killed_writers_are_swept(tmp_path):
+    folder = tmp_path / "sklearn_meshph_distances"
+    folder.mkdir()
+    old = 10 * 3600
+    orphans = [folder / ".dead.1.a.tmp", folder / ".dead.2.b.tmp"]
+    orphans[0].write_bytes(b"half a stack")
+    os.mkfifo(orphans[1])  # a strange file: removed, never opened
+    fresh = folder / ".busy.3.c.tmp"  # a writer at work right now: kept
+    fresh.write_bytes(b"being written")
+    target = tmp_path / "kept.txt"
+    target.write_text("not in the cache")
+    link = folder / ".link.4.d.tmp"
+    link.symlink_to(target)
+    for path in [*orphans, link]:
+        os.utime(
+            path, (path.lstat().st_atime - old, path.lstat().st_mtime - old), follow_symlinks=False
+        )
+    PerDiagramDistance(metric="bottleneck", memory=tmp_path).fit_transform(samples())
+    assert not any(path.exists() or path.is_symlink() for path in [*orphans, link])
+    assert fresh.exists() and target.read_text() == "not in the cache"
+    assert [path.suffix for path in entries(tmp_path)] == [".tmp", ".npy"] or len(
+        entries(tmp_path)
+    ) == 2

@@ -9,7 +9,8 @@ the data is loaded with ``allow_pickle=False`` and checked for NaN and negative
 distances. Anything but a regular file in place of an entry (a FIFO, a folder, a
 symbolic link) is never opened; an unusable entry is recomputed and replaced, with a
 :class:`~sklearn_meshph.spectral.cache.CacheWarning`. Entries are written to a
-temporary file in the same folder and renamed into place; a folder that cannot be
+temporary file in the same folder and renamed into place (temporary files that a
+killed writer left are removed by later writers after an hour); a folder that cannot be
 written is used read-only, with a warning.
 """
 
@@ -27,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import VERSION
-from ..spectral.cache import CacheWarning, EigenCache, cache_of
+from ..spectral.cache import CacheWarning, EigenCache, cache_of, sweep_orphans
 
 __all__ = ["StackCache", "stack_cache_of"]
 
@@ -119,6 +120,7 @@ class StackCache:
             if entry.is_dir() and not entry.is_symlink():
                 shutil.rmtree(entry)  # an unusable entry being replaced
             os.replace(temporary, entry)
+            sweep_orphans(self.folder)
         except OSError as error:
             temporary.unlink(missing_ok=True)
             warnings.warn(

@@ -47,6 +47,7 @@ __all__ = [
     "EigenCache",
     "cache_of",
     "numerics_digest",
+    "sweep_orphans",
 ]
 
 #: Bumped whenever the numbers a solve gives may change (cleaning, assembly, solver).
@@ -197,6 +198,24 @@ def cache_of(memory):
     return memory
 
 
+def sweep_orphans(folder: Path) -> None:
+    """Remove the temporary files and folders (``.*.tmp``) that killed writers left in
+    a cache folder, once they are older than an hour (a writer at work keeps its own).
+    Links are removed, never followed."""
+    now = time.time()
+    for path in folder.glob(".*.tmp"):
+        try:
+            mode = path.lstat()
+            if now - mode.st_mtime <= _STALE_TEMPORARY:
+                continue
+            if stat.S_ISDIR(mode.st_mode):
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink()
+        except OSError:
+            pass
+
+
 class EigenCache:
     """Eigensolves stored under ``location`` (see the module's docstring)."""
 
@@ -299,7 +318,7 @@ class EigenCache:
         temporary = self.folder / f".{key}.{os.getpid()}.{uuid.uuid4().hex}.tmp"
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
-            self._sweep()
+            sweep_orphans(self.folder)
             temporary.mkdir()
             header = {
                 "format": _FORMAT,
@@ -339,13 +358,3 @@ class EigenCache:
                 CacheWarning,
                 stacklevel=3,
             )
-
-    def _sweep(self) -> None:
-        """Remove temporary folders that a killed writer left behind."""
-        now = time.time()
-        for path in self.folder.glob(".*.tmp"):
-            try:
-                if now - path.stat().st_mtime > _STALE_TEMPORARY:
-                    shutil.rmtree(path, ignore_errors=True)
-            except OSError:
-                pass
