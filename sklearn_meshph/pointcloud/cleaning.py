@@ -14,7 +14,7 @@ from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, weld_vertices
-from .graph import canonical_order, neighbourhood_components
+from .graph import canonical_order, neighbourhood_components, sparse_outliers
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
 
@@ -42,30 +42,45 @@ def _largest(labels: np.ndarray, area: np.ndarray) -> tuple[np.ndarray, int, flo
 
 def _far_components(points, laplacian, components, place):
     """Drop the points far from the rest (:func:`.graph.neighbourhood_components`): the
-    component of largest area is kept, its operator built without the others."""
+    component of largest area is kept, its operator built without the others; then the
+    outliers of that component (:func:`.graph.sparse_outliers`), each a component of its
+    own. Returns ``(kept, L, M, n_other, share)``."""
     n_components, labels = neighbourhood_components(points)
     build = CLOUD_LAPLACIANS[laplacian].value
-    if n_components == 1:
-        return np.ones(len(points), dtype=bool), *build(points), 0, 0.0
-    if components == "error":
-        raise ValueError(
-            f"{place}: the point cloud has {n_components} connected components (points "
-            "far from each other for the cloud's sampling); pass components='largest' to "
-            "keep the one of largest area"
-        )
-    operators, area = {}, np.zeros(n_components)
-    for label in range(n_components):
-        members = labels == label
-        if np.count_nonzero(members) >= MIN_POINTS:
-            operators[label] = build(points[members])
-            area[label] = operators[label][1].diagonal().sum()
-    if not operators:
-        raise ValueError(
-            f"{place}: the point cloud falls apart into {n_components} groups of fewer "
-            f"than {MIN_POINTS} points far from each other"
-        )
-    kept, n_other, share = _largest(labels, area)
-    return kept, *operators[int(labels[np.argmax(kept)])], n_other, share
+    kept, operator, n_other, share = np.ones(len(points), dtype=bool), None, 0, 0.0
+    if n_components > 1:
+        if components == "error":
+            raise ValueError(
+                f"{place}: the point cloud has {n_components} connected components (points "
+                "far from each other for the cloud's sampling); pass components='largest' "
+                "to keep the one of largest area"
+            )
+        operators, area = {}, np.zeros(n_components)
+        for label in range(n_components):
+            members = labels == label
+            if np.count_nonzero(members) >= MIN_POINTS:
+                operators[label] = build(points[members])
+                area[label] = operators[label][1].diagonal().sum()
+        if not operators:
+            raise ValueError(
+                f"{place}: the point cloud falls apart into {n_components} groups of fewer "
+                f"than {MIN_POINTS} points far from each other"
+            )
+        kept, n_other, share = _largest(labels, area)
+        operator = operators[int(labels[np.argmax(kept)])]
+    outliers = np.flatnonzero(kept)[sparse_outliers(points[kept])]
+    if len(outliers):
+        if components == "error":
+            raise ValueError(
+                f"{place}: the point cloud has {len(outliers)} outliers (points off the "
+                "surface for the sampling around them); pass components='largest' to drop "
+                "them"
+            )
+        kept[outliers] = False
+        operator, n_other = None, n_other + len(outliers)
+    if operator is None:
+        operator = build(points[kept])
+    return kept, *operator, n_other, share
 
 
 def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | None, weld: bool):
@@ -85,7 +100,9 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     2. points far from the rest for the cloud's own sampling (a stray point, a small
        far cluster: :func:`.graph.neighbourhood_components`) are other components, as
        a mesh's: ``components="largest"`` keeps the one of largest area (the mass of
-       its own operator; ties: the lowest), ``"error"`` raises;
+       its own operator; ties: the lowest), ``"error"`` raises; so are, each alone, the
+       outliers of the kept points (points off the surface for the sampling around
+       them, nearer than the far ones: :func:`.graph.sparse_outliers`);
     3. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
        the kept points in the unit box;
     4. points in no local triangle (zero mass: their neighbours on their own sheet too

@@ -7,7 +7,9 @@ mesh's edges play for a mesh: the complex joins what the operator couples and no
 else, so it never crosses a thin part or the gap between parts nearby. The symmetric
 k-nearest-neighbour graph (an edge wherever either point is among the other's
 ``GRAPH_NEIGHBORS`` nearest) is the ``"graph"`` Laplacian's; without its long edges, it
-decides which points are far from the rest (:func:`neighbourhood_components`).
+decides which points are far from the rest (:func:`neighbourhood_components`), and the
+neighbourhood radii of its points which are outliers for the sampling around them
+(:func:`sparse_outliers`).
 """
 
 from __future__ import annotations
@@ -22,11 +24,13 @@ from ._triangulation import nearest, tangent_fans
 __all__ = [
     "FAR_EDGE_RATIO",
     "GRAPH_NEIGHBORS",
+    "OUTLIER_RATIO",
     "canonical_order",
     "edge_adjacency",
     "knn_graph",
     "nearest",
     "neighbourhood_components",
+    "sparse_outliers",
     "surface_graph",
 ]
 
@@ -36,6 +40,10 @@ GRAPH_NEIGHBORS = 10
 #: An edge of the kNN graph longer than this many times the smaller neighbourhood radius
 #: of its two ends joins points that are far apart for the cloud's own sampling.
 FAR_EDGE_RATIO = 8.0
+
+#: A point whose neighbourhood radius is more than this many times its neighbours' is
+#: an outlier for the sampling around it (:func:`sparse_outliers`).
+OUTLIER_RATIO = 3.0
 
 
 def canonical_order(points: np.ndarray) -> np.ndarray:
@@ -112,6 +120,39 @@ def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
     b = indices.ravel()
     short = distances.ravel() <= FAR_EDGE_RATIO * np.minimum(radius[a], radius[b])
     return connected_components(n, np.column_stack([a[short], b[short]]))
+
+
+def sparse_outliers(points: np.ndarray) -> np.ndarray:
+    """The mask of the points standing alone off the surface, for the sampling around them.
+
+    The neighbourhood radius of a point is the distance to its ``GRAPH_NEIGHBORS``-th
+    nearest neighbour. A point off the surface by a few spacings (a stray point inside
+    the shape's box, between two legs of a table) has its nearest neighbours on the
+    surface below it, and a radius of about its height; theirs is the sampling's
+    spacing. In two steps:
+
+    1. a point is a *candidate* when its radius is more than :data:`OUTLIER_RATIO`
+       times the median radius of its neighbours;
+    2. a candidate is an *outlier* when its radius is more than :data:`OUTLIER_RATIO`
+       times the radius of every neighbour that is not a candidate itself (and it has
+       one).
+
+    Step 2 keeps the points where the sampling changes: a point of a sparse region at
+    its border with a dense one may have mostly dense neighbours (step 1), but also
+    sparse ones whose radius is as long as its own. Two outliers near each other do
+    not vouch for each other, as candidates do not count in step 2. Ratios of lengths
+    only: the same at any scale and density. Fewer than ``GRAPH_NEIGHBORS + 1`` points
+    have no neighbourhoods to compare: none is an outlier. ``points`` must be distinct.
+    """
+    n = len(points)
+    if n <= GRAPH_NEIGHBORS:
+        return np.zeros(n, dtype=bool)
+    distances, indices = nearest(points, GRAPH_NEIGHBORS)
+    radius = distances[:, -1]
+    around = radius[indices]
+    candidate = radius > OUTLIER_RATIO * np.median(around, axis=1)
+    vouching = np.where(candidate[indices], 0.0, around).max(axis=1)
+    return candidate & (vouching > 0) & (radius > OUTLIER_RATIO * vouching)
 
 
 def edge_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:

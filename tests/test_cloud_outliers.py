@@ -1,0 +1,93 @@
+"""Outliers of a point cloud nearer than the far points: the density rule of cleaning.
+
+Stray points inside a shape's bounding box (``sample_point_cloud(outliers=...)``) are
+nearer than ``FAR_EDGE_RATIO`` neighbourhood radii: before the rule they joined the
+operator, each with a fan of its own weakly tied to the surface, and moved the first
+eigenvalues by 30-70% (measured on these clouds). A point whose neighbourhood radius is
+more than ``OUTLIER_RATIO`` times its neighbours' is dropped
+(:func:`sklearn_meshph.pointcloud.graph.sparse_outliers`); points where the sampling
+changes are not.
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from sklearn_meshph import (
+    LaplacianEigenTransformer,
+    MeshCleaningWarning,
+    make_shapes,
+    sample_point_cloud,
+)
+from sklearn_meshph.mesh import unit_box
+from sklearn_meshph.pointcloud.graph import neighbourhood_components, sparse_outliers
+
+MESHES = make_shapes(n_per_class=1, random_state=0).data
+N = 1500
+
+
+@pytest.fixture(scope="module")
+def with_outliers():
+    """1,500 points on a make_shapes mesh and 5 stray points in its box (appended)."""
+    return sample_point_cloud(MESHES[4], N, outliers=5, random_state=0)
+
+
+def fields(clouds):
+    return LaplacianEigenTransformer(eigen_index=1, n_eigenpairs=8).fit_transform(clouds)
+
+
+def test_outliers_inside_the_box_are_dropped_and_reported(with_outliers):
+    # Not far points: the kNN graph without its long edges keeps them connected.
+    assert neighbourhood_components(unit_box(with_outliers)[0])[0] == 1
+    with pytest.warns(MeshCleaningWarning, match=r"sample 0: .* of which 5 far points"):
+        (field,) = fields([with_outliers])
+    np.testing.assert_array_equal(field.input_to_kept[:N], np.arange(N))
+    np.testing.assert_array_equal(field.input_to_kept[N:], -1)
+    report = field.cleaning
+    assert report.n_far_points == report.n_other_components == report.n_component_vertices == 5
+    with pytest.raises(ValueError, match="sample 0: the point cloud has 5 outliers"):
+        LaplacianEigenTransformer(components="error").fit_transform([with_outliers])
+
+
+def test_the_eigenvalues_with_outliers_are_the_clean_clouds(with_outliers):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshCleaningWarning)
+        clean, stray = fields([with_outliers[:N], with_outliers])
+    # Before the rule: 0.52 apart (the first five non-zero eigenvalues, relative).
+    np.testing.assert_allclose(stray.spectrum, clean.spectrum, rtol=0.02)
+
+
+@pytest.mark.parametrize("mesh", range(len(MESHES)))
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+def test_uneven_density_loses_no_point(mesh, noise):
+    # One half ten times denser than the other: the points of the sparse half next to
+    # the dense one have mostly dense neighbours, and are still not outliers.
+    cloud = sample_point_cloud(MESHES[mesh], 3000, density=10.0, noise=noise, random_state=mesh)
+    assert not sparse_outliers(unit_box(cloud)[0]).any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshCleaningWarning)
+        (field,) = fields([cloud])
+    if noise == 0.0:
+        assert field.cleaning is None and field.n_vertices == len(cloud)
+    else:  # a few noisy points may be in no local triangle; none is an outlier
+        assert field.cleaning is None or field.cleaning.n_far_points == 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_sharp_density_step_is_not_taken_for_outliers(seed):
+    # A square, one half 30 times sparser: a sparse point at the step has a radius over
+    # three times its dense neighbours' median (step 1), its sparse neighbours vouch.
+    rng = np.random.default_rng(seed)
+    dense = np.column_stack([rng.random(4000) * 0.5, rng.random(4000), np.zeros(4000)])
+    sparse = np.column_stack([0.5 + rng.random(133) * 0.5, rng.random(133), np.zeros(133)])
+    assert not sparse_outliers(np.vstack([dense, sparse])).any()
+
+
+def test_a_pair_of_outliers_does_not_vouch_for_itself():
+    rng = np.random.default_rng(0)
+    plane = np.column_stack([rng.random((2000, 2)), 0.002 * rng.random(2000)])
+    pair = [[0.5, 0.5, 0.2], [0.5, 0.51, 0.2]]
+    mask = sparse_outliers(np.vstack([plane, pair]))
+    np.testing.assert_array_equal(np.flatnonzero(mask), [2000, 2001])
+    assert not sparse_outliers(plane[:10]).any()  # too few points to compare
