@@ -51,9 +51,24 @@ def _row_blocks(n_rows, pairs_per_row, n_tasks):
     return np.unique(bounds)
 
 
+class _Shared:
+    """What every task of one call reads (packed samples: a tuple of arrays), in an
+    object that joblib's dask backend sends to the cluster once per call instead of with
+    every task: it scatters the arguments that are weakly referable and larger than a
+    kilobyte by ``sizeof``, which a tuple is not."""
+
+    def __init__(self, value):
+        self.value = value
+        self.nbytes = sum(getattr(array, "nbytes", 0) for array in value)
+
+    def __sizeof__(self) -> int:
+        return object.__sizeof__(self) + self.nbytes
+
+
 def _block(function, left, right, start, stop, n_cols, symmetric, first):
     """``function`` on the pairs of rows ``start:stop``: with every column, or when
     symmetric with the columns from ``i + first`` on (``first`` 0: with the diagonal)."""
+    left, right = left.value, right.value
     if symmetric:
         rows = np.concatenate([np.full(n_cols - i - first, i) for i in range(start, stop)])
         cols = np.concatenate([np.arange(i + first, n_cols) for i in range(start, stop)])
@@ -266,7 +281,8 @@ def pair_matrix(
     each; results do not depend on the blocks, so neither on ``n_jobs`` nor the backend.
     """
     symmetric = right is None
-    right = left if symmetric else right
+    left = _Shared(left)
+    right = left if symmetric else _Shared(right)
     first = 0 if symmetric and diagonal is None else 1
     pairs_per_row = np.arange(n - first, -first, -1) if symmetric else np.full(n, m)
     total = int(pairs_per_row.sum())
