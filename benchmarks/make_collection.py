@@ -102,7 +102,7 @@ def bend(vertices, angle):
     if half == 0.0 or angle == 0.0:
         return vertices.copy()
     curvature = angle / half
-    along, across = local[:, 0], local[:, 1]
+    along, across = local[:, 0].copy(), local[:, 1].copy()
     radius = 1.0 / curvature - across
     local[:, 0] = np.sin(curvature * along) * radius
     local[:, 1] = 1.0 / curvature - np.cos(curvature * along) * radius
@@ -262,11 +262,14 @@ def base_collection(name):
     return meshes, y
 
 
-def build(folder, base, seed, n, chunk, n_jobs, log=print):
-    """Every chunk of the first ``n`` samples, the missing ones computed."""
+def build(folder, base, seed, n, chunk, n_jobs, shard=(0, 1), log=print):
+    """Every chunk of the first ``n`` samples, the missing ones computed: chunk ``c``
+    when ``c % shard[1] == shard[0]`` (processes of different shards share the work)."""
     meshes, y = base_collection(base)
     started = time.perf_counter()
-    for start, stop in _chunks(n, chunk):
+    for c, (start, stop) in enumerate(_chunks(n, chunk)):
+        if c % shard[1] != shard[0]:
+            continue
         cached = chunk_path(folder, seed, start, stop).exists()
         build_chunk(folder, meshes, y, seed, start, stop, n_jobs=n_jobs)
         if not cached:
@@ -281,8 +284,12 @@ def main():
     parser.add_argument("--folder", default=str(DEFAULT_FOLDER))
     parser.add_argument("--n-jobs", type=int, default=1)
     parser.add_argument("--base", default="watertight_dev")
+    parser.add_argument(
+        "--shard", default="0/1", help="K/M: this process builds the chunks c with c %% M == K"
+    )
     args = parser.parse_args()
-    build(args.folder, args.base, args.seed, args.n, args.chunk, args.n_jobs)
+    shard = tuple(int(part) for part in args.shard.split("/"))
+    build(args.folder, args.base, args.seed, args.n, args.chunk, args.n_jobs, shard)
 
 
 if __name__ == "__main__":
