@@ -39,7 +39,7 @@ from .mesh import (
     weld_vertices,
 )
 from .persistence import LowerStarPersistence, extended_persistence, lower_star_persistence
-from .pipelines import make_graph_classifier, make_mesh_distance
+from .pipelines import make_graph_classifier, make_mesh_distance, make_mesh_features
 from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
 from .retrieval import ShapeNeighbors, ShapeNeighborsClassifier, retrieval_scores
@@ -92,6 +92,7 @@ __all__ = [
     "lower_star_persistence",
     "make_graph_classifier",
     "make_mesh_distance",
+    "make_mesh_features",
     "make_shapes",
     "point_cloud_laplacian",
     "sample_point_cloud",

@@ -5,11 +5,14 @@ tables."""
 
 from __future__ import annotations
 
+import math
 import os
 from numbers import Integral
 
+import numpy as np
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.pipeline import FeatureUnion, Pipeline
+from sklearn.preprocessing import FunctionTransformer
 
 from ._param_validation import HasMethods, Interval, Options, validate_params
 from ._registry import Option, Registry
@@ -20,9 +23,15 @@ from .persistence import LowerStarPersistence
 from .persistence.filtrations import FILTRATIONS
 from .spectral import LAPLACIANS, SIGNATURES, SOLVERS, LaplacianEigenTransformer, ShapeDNA
 from .spectral.cache import cache_of
-from .vectorization import DiagramStatistics, GraphFeatures
+from .vectorization import DiagramStatistics, DistanceScaler, GraphFeatures, PersistenceLandscape
 
-__all__ = ["PRESETS", "all_registries", "make_graph_classifier", "make_mesh_distance"]
+__all__ = [
+    "PRESETS",
+    "all_registries",
+    "make_graph_classifier",
+    "make_mesh_distance",
+    "make_mesh_features",
+]
 
 # The extended-persistence diagrams of the default (ids of LowerStarPersistence's parts:
 # the superlevel pairs (saddle, max), the components' ranges, the essential H1 of closed
@@ -34,6 +43,9 @@ _DNA_WEIGHT = 0.5
 _EIGENPAIRS = 56
 _DNA_EIGENPAIRS = 50
 _SCALES = 5
+# The linear-cost preset: landscapes per diagram and their grid points (docs/scale.md).
+_LANDSCAPES = 5
+_LANDSCAPE_RESOLUTION = 20
 # The graph pipeline: PersLay's heat kernel signatures of the normalized Laplacian (every
 # eigenpair), the extended persistence of each on the graph, and trees on features.
 _GRAPH_TIMES = (0.1, 10.0)
@@ -41,6 +53,13 @@ _GRAPH_TIMES = (0.1, 10.0)
 _GRAPH_CLASSIFIER_TIMES = (0.1, 1.0, 10.0)
 _GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
 _GRAPH_TREES = 300
+
+
+def _kind_persistence(kind, common):
+    """The extended diagrams of one kind, one per signature time."""
+    return LowerStarPersistence(
+        filtration="extended", parts=(kind,), n_jobs=common["n_jobs"], verbose=common["verbose"]
+    )
 
 
 def _kind_distances(kinds, common):
@@ -52,12 +71,7 @@ def _kind_distances(kinds, common):
             kind,
             Pipeline(
                 [
-                    (
-                        "persistence",
-                        LowerStarPersistence(
-                            filtration="extended", parts=(kind,), n_jobs=n_jobs, verbose=verbose
-                        ),
-                    ),
+                    ("persistence", _kind_persistence(kind, common)),
                     (
                         "distance",
                         DiagramDistance(
@@ -76,10 +90,14 @@ def _kind_distances(kinds, common):
     ]
 
 
-def _default(common):
-    eigen = LaplacianEigenTransformer(
+def _default_eigen(common):
+    return LaplacianEigenTransformer(
         signature="log-hks", n_eigenpairs=_EIGENPAIRS, n_scales=_SCALES, **common["eigen"]
     )
+
+
+def _default(common):
+    eigen = _default_eigen(common)
     parts = _kind_distances(_KINDS, common)
     parts.append(
         (
@@ -94,6 +112,50 @@ def _default(common):
     )
     weights = _KINDS | {"dna": _DNA_WEIGHT}
     return eigen, CombinedDistance(parts, weights=weights)
+
+
+def _feature_union(common):
+    """The default's parts as blocks of features: the landscapes of each diagram kind
+    (every time a block of its own) and the logarithm of the Shape-DNA spectrum, each
+    scaled to a root-mean-square distance of 1, weighted by the square roots of the
+    default's weights (squared Euclidean distances add the parts as the default adds
+    its distances)."""
+    parts = [
+        (
+            kind,
+            Pipeline(
+                [
+                    ("persistence", _kind_persistence(kind, common)),
+                    (
+                        "landscape",
+                        PersistenceLandscape(
+                            n_landscapes=_LANDSCAPES,
+                            resolution=_LANDSCAPE_RESOLUTION,
+                            n_jobs=common["n_jobs"],
+                        ),
+                    ),
+                    ("scale", DistanceScaler(n_blocks=_SCALES)),
+                ]
+            ),
+        )
+        for kind in _KINDS
+    ]
+    spectrum = Pipeline(
+        [
+            ("spectrum", ShapeDNA(n_eigenpairs=_DNA_EIGENPAIRS)),
+            ("log", FunctionTransformer(np.log, feature_names_out="one-to-one")),
+            ("scale", DistanceScaler()),
+        ]
+    )
+    weights = {name: math.sqrt(w) for name, w in (_KINDS | {"dna": _DNA_WEIGHT}).items()}
+    return FeatureUnion([*parts, ("dna", spectrum)], transformer_weights=weights)
+
+
+def _features(common):
+    distance = FeatureDistance(metric="euclidean", n_jobs=common["n_jobs"])
+    return _default_eigen(common), Pipeline(
+        [("features", _feature_union(common)), ("distance", distance)]
+    )
 
 
 def _chain(eigen, persistence, distance):
@@ -184,6 +246,16 @@ PRESETS = Registry(
             "Canberra distance (sum of differences relative to their sums)",
         ),
         Option(
+            "features",
+            _features,
+            "the default's diagrams and spectrum as fixed-length features "
+            "(`make_mesh_features()`, for linear models and approximate nearest-neighbour "
+            f"indexes), Euclidean distance: {_LANDSCAPES} landscapes of {_LANDSCAPE_RESOLUTION} "
+            "points per diagram, the spectrum's logarithm, each part and time scaled to a "
+            "root-mean-square distance of 1 (`DistanceScaler`), weighted by the square roots "
+            "of the default's weights",
+        ),
+        Option(
             "graph",
             _graph,
             "graphs (PersLay's signatures): heat kernel signatures of the normalized "
@@ -244,6 +316,8 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
           accepted with a ``FutureWarning``.
         - ``"paper"``: the paper's literal setting.
         - ``"shape-dna"``: the spectral baseline.
+        - ``"features"``: the Euclidean distance between the fixed-length features of
+          :func:`make_mesh_features` (the default's diagrams and spectrum, vectorized).
         - ``"graph"``: for graphs (what the main job runs on a TU dataset folder):
           the diagrams and features of :func:`make_graph_classifier` as distances.
     memory : str, path, joblib.Memory or None, default=None
@@ -272,8 +346,14 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
     >>> make_mesh_distance("paper").named_steps["eigen"].laplacian
     'graph'
     """
+    common = _common(memory, n_jobs, random_state, verbose)
+    eigen, distance = PRESETS[preset].value(common)  # a former name warns
+    return Pipeline([("eigen", eigen), ("distance", distance)])
+
+
+def _common(memory, n_jobs, random_state, verbose):
     cache_of(memory)  # refuses an empty path before anything runs
-    common = {
+    return {
         "eigen": {
             "memory": memory,
             "n_jobs": n_jobs,
@@ -283,8 +363,75 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
         "n_jobs": n_jobs,
         "verbose": verbose,
     }
-    eigen, distance = PRESETS[preset].value(common)  # a former name warns
-    return Pipeline([("eigen", eigen), ("distance", distance)])
+
+
+@validate_params(
+    {
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "n_jobs": [Integral, None],
+        "random_state": ["random_state"],
+        "verbose": [Interval(Integral, 0, None, closed="left")],
+    }
+)
+def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
+    """A pipeline from meshes to fixed-length feature vectors: the linear-cost path.
+
+    The default's eigen stage and diagrams (:func:`make_mesh_distance`), vectorized:
+    for each extended diagram kind (``"ord1"``, ``"ext0"``, ``"ext1"``), the first 5
+    persistence landscapes of each time's diagram on a grid of 20 points learned by
+    ``fit`` (:class:`PersistenceLandscape`), and the logarithm of the Shape-DNA
+    spectrum (the 49 non-zero eigenvalues: differences of logarithms are relative
+    differences, as Canberra's are). Each part, and each time within a part, is scaled
+    to a root-mean-square distance of 1 among the fitted meshes (:class:`DistanceScaler`,
+    one pass over the rows), and the parts are weighted by the square roots of the
+    default's weights, so that the squared Euclidean distance adds the parts as the
+    default adds its distances. The result is the same length for every mesh, finite,
+    and its Euclidean distance is what ``make_mesh_distance("features")`` computes:
+    rows for linear models (after ``StandardScaler``), and for approximate
+    nearest-neighbour indexes, whose cost grows linearly with the collection where a
+    precomputed distance matrix grows as its square.
+
+    Two steps, ``"eigen"`` and ``"features"`` (a ``FeatureUnion`` of ``"ord1"``,
+    ``"ext0"``, ``"ext1"`` and ``"dna"``), every parameter reachable for
+    ``set_params`` and grid searches (``features__ord1__landscape__n_landscapes``,
+    ``features__transformer_weights``...).
+
+    Parameters
+    ----------
+    memory : str, path, joblib.Memory or None, default=None
+        Cache of the eigensolves (see :class:`LaplacianEigenTransformer`), shared with
+        :func:`make_mesh_distance`: the same solve serves both.
+    n_jobs : int, default=None
+        Parallel jobs of every stage (joblib).
+    random_state : int, RandomState or None, default=0
+        Seed of the eigensolver's start vector, part of the cache's key.
+    verbose : int, default=0
+        Progress bars of the stages that have them.
+
+    Returns
+    -------
+    sklearn.pipeline.Pipeline
+        A transformer: ``fit_transform(meshes)`` returns an array of shape
+        ``(n_meshes, 1549)`` (3 kinds x 5 times x 5 landscapes x 20 points, and 49
+        eigenvalues).
+
+    See Also
+    --------
+    make_mesh_distance : ``make_mesh_distance("features")``, the same features'
+        Euclidean distances as a precomputed matrix.
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import LogisticRegression
+    >>> from sklearn.pipeline import make_pipeline
+    >>> from sklearn.preprocessing import StandardScaler
+    >>> from sklearn_meshph import make_mesh_features
+    >>> model = make_pipeline(make_mesh_features(), StandardScaler(), LogisticRegression())
+    >>> make_mesh_features().named_steps["features"].transformer_weights["ext0"] ** 2
+    0.5...
+    """
+    common = _common(memory, n_jobs, random_state, verbose)
+    return Pipeline([("eigen", _default_eigen(common)), ("features", _feature_union(common))])
 
 
 @validate_params(

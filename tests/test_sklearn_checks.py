@@ -28,7 +28,7 @@ from sklearn.utils.estimator_checks import (
 )
 
 import sklearn_meshph
-from sklearn_meshph import CombinedDistance, FeatureDistance
+from sklearn_meshph import CombinedDistance, DistanceScaler, FeatureDistance
 
 
 def combined_of_vectors():
@@ -41,7 +41,7 @@ def combined_of_vectors():
 def expected_failed_checks(estimator):
     """The checks of ``parametrize_with_checks`` that are expected to fail, with why.
 
-    None today: both estimators take 2-d arrays, refuse sparse input by name, compare
+    None today: they take 2-d arrays, refuse sparse input by name, compare
     rows exactly (Canberra and cityblock distances, so no rounding differs between
     orders of the samples) and expose ``n_features_in_``.
     """
@@ -49,7 +49,8 @@ def expected_failed_checks(estimator):
 
 
 @parametrize_with_checks(
-    [FeatureDistance(), combined_of_vectors()], expected_failed_checks=expected_failed_checks
+    [FeatureDistance(), combined_of_vectors(), DistanceScaler()],
+    expected_failed_checks=expected_failed_checks,
 )
 def test_scikit_learn_checks_of_the_estimators_of_rows(estimator, check):
     check(estimator)
@@ -102,7 +103,7 @@ def test_every_estimator_is_checked():
     names = {type(e).__name__ for e in ESTIMATORS}
     assert {"DiagramDistance", "LaplacianEigenTransformer", "ShapeDNA"} <= names
     rows = {type(e).__name__ for e in ESTIMATORS if e not in SAMPLE_ESTIMATORS}
-    assert rows == {"FeatureDistance", "CombinedDistance"}
+    assert rows == {"FeatureDistance", "CombinedDistance", "DistanceScaler"}
 
 
 def test_the_api_checks_that_need_data_are_all_listed():

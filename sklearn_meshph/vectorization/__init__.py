@@ -10,12 +10,14 @@ from .kernels import (
     PersistenceWeightedGaussianKernel,
     SlicedWassersteinKernel,
 )
+from .scaling import DistanceScaler
 from .summaries import DiagramStatistics, PersistenceEntropy
 
 __all__ = [
     "BettiCurve",
     "DiagramStatistics",
     "DistanceKernel",
+    "DistanceScaler",
     "EntropyCurve",
     "GraphFeatures",
     "PersistenceEntropy",
