@@ -3,11 +3,13 @@ solve of small operators.
 
 Eigenpairs come from ARPACK (:func:`scipy.sparse.linalg.eigsh`) in shift-invert mode
 with a small negative shift, so that ``L - sigma M`` is positive definite and factored
-once (:mod:`.factorization`). Small operators (below a few hundred vertices or nodes:
-:data:`DENSE_MAX_VERTICES`, :data:`DENSE_MAX_NODES`), requests of nearly every
-eigenpair and ``solver="dense"`` go to LAPACK's dense symmetric eigensolver instead
-(:func:`dense_eigenpairs`). Both give ascending eigenvalues and M-orthonormal
-eigenvectors under one sign rule (:func:`fix_signs`).
+once (:mod:`.factorization`), to a tolerance far below what any signature resolves, and
+again to machine precision when the spectrum has repeated eigenvalues. Small operators
+(below a few hundred vertices or nodes: :data:`DENSE_MAX_VERTICES`,
+:data:`DENSE_MAX_NODES`), requests of nearly every eigenpair and ``solver="dense"`` go
+to LAPACK's dense symmetric eigensolver instead (:func:`dense_eigenpairs`). Both give
+ascending eigenvalues and M-orthonormal eigenvectors under one sign rule
+(:func:`fix_signs`).
 """
 
 from __future__ import annotations
@@ -55,6 +57,18 @@ DENSE_LIMIT = 12_000
 _DENSE_FALLBACK_VERTICES = 3000
 # Shift of shift-invert, relative to the typical eigenvalue scale trace(L)/trace(M)/n.
 _RELATIVE_SHIFT = 1e-2
+# ARPACK stops when every Ritz pair's residual is below this share of its Ritz value,
+# with a Krylov basis of _BASIS_RATIO times the eigenpairs asked for (at least
+# _MIN_BASIS vectors): the eigenpairs then agree to rounding with a solve to machine
+# precision (tol=0, a basis of twice the eigenpairs), which costs more restarts and a
+# larger basis to orthogonalize against (measured in docs/scale.md).
+_TOLERANCE = 1e-8
+_BASIS_RATIO = 1.6
+_MIN_BASIS = 20
+# A single-vector Lanczos sees the copies of a repeated eigenvalue only as rounding
+# brings them in, late: when two computed eigenvalues agree within this (relative), the
+# spectrum may be symmetric, and it is solved again to machine precision.
+_REPEATED_RTOL = 1e-6
 
 
 def eigen_shift(L: sp.spmatrix, M: sp.spmatrix) -> float:
@@ -118,6 +132,52 @@ def dense_eigenpairs(
     return values, vectors * inverse_root[:, None]
 
 
+def _has_repeats(values: np.ndarray) -> bool:
+    """Whether two of the ascending ``values`` agree within :data:`_REPEATED_RTOL`
+    (relative to the largest for zeros)."""
+    gaps = np.diff(values)
+    return bool(np.any(gaps <= _REPEATED_RTOL * np.maximum(values[1:], values[-1] * 1e-9)))
+
+
+def _shift_invert(L, M, sigma, op, v0, n_eigenpairs, *, fast):
+    """ARPACK's eigenpairs in shift-invert mode, ascending, or ``(None, None)`` when it
+    fails on an operator small enough for the dense solver. ``fast``: the tolerance
+    :data:`_TOLERANCE` and a basis of :data:`_BASIS_RATIO` times the eigenpairs;
+    otherwise machine precision and twice the eigenpairs."""
+    n = L.shape[0]
+    if fast:
+        ncv, tol = max(int(_BASIS_RATIO * n_eigenpairs) + 1, _MIN_BASIS), _TOLERANCE
+    else:
+        ncv, tol = max(2 * n_eigenpairs + 1, _MIN_BASIS), 0.0
+    ncv = min(n, ncv)
+    # An eigenvalue of a multiplicity beyond the block (many triangles on one edge) can
+    # stall ARPACK: no convergence, or error 3 ("no shifts could be applied"). A larger
+    # Krylov space resolves it; failing that, a small mesh is solved densely.
+    for attempt in range(3):
+        try:
+            values, vectors = eigsh(
+                L,
+                k=n_eigenpairs,
+                M=M,
+                sigma=sigma,
+                which="LM",
+                OPinv=op,
+                v0=v0,
+                ncv=ncv,
+                tol=tol,
+                maxiter=max(1000, 10 * n_eigenpairs),
+            )
+        except ArpackError:  # ArpackNoConvergence is one
+            if ncv == n or attempt == 2:
+                if n > _DENSE_FALLBACK_VERTICES:
+                    raise
+                return None, None
+            ncv = min(n, 2 * ncv + 20)
+        else:
+            order = np.argsort(values, kind="stable")
+            return values[order], vectors[:, order]
+
+
 def generalized_eigenpairs(
     L: sp.spmatrix,
     M: sp.spmatrix,
@@ -150,35 +210,9 @@ def generalized_eigenpairs(
         if solver != "dense" and n > dense_max and n_eigenpairs < n - 1 and sigma < 0:
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-            # An eigenvalue of a multiplicity beyond the block (many triangles on one
-            # edge) can stall ARPACK: no convergence, or error 3 ("no shifts could be
-            # applied"). A larger Krylov space resolves it; failing that, a small mesh
-            # is solved densely.
-            ncv = min(n, max(2 * n_eigenpairs + 1, 20))
-            for attempt in range(3):
-                try:
-                    values, vectors = eigsh(
-                        L,
-                        k=n_eigenpairs,
-                        M=M,
-                        sigma=sigma,
-                        which="LM",
-                        OPinv=op,
-                        v0=v0,
-                        ncv=ncv,
-                        maxiter=max(1000, 10 * n_eigenpairs),
-                    )
-                except ArpackError:  # ArpackNoConvergence is one
-                    values = vectors = None
-                    if ncv == n or attempt == 2:
-                        if n > _DENSE_FALLBACK_VERTICES:
-                            raise
-                        break
-                    ncv = min(n, 2 * ncv + 20)
-                else:
-                    order = np.argsort(values, kind="stable")
-                    values, vectors = values[order], vectors[:, order]
-                    break
+            values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs, fast=True)
+            if values is not None and _has_repeats(values):
+                values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs, fast=False)
         if values is None:
             values, vectors = dense_eigenpairs(L, mass, n_eigenpairs)
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
