@@ -185,3 +185,59 @@ def test_graph_features_refuse_pair_histograms_of_huge_graphs():
     with pytest.raises(ValueError, match="sample 0: 4001 nodes, more than the 4000 .*pairs=False"):
         GraphFeatures().fit([field])
     assert GraphFeatures(pairs=False).fit_transform([field]).shape[0] == 1
+
+
+def spider(leg):
+    """A path 0-1-2-3-4 with node 5 hung on node ``leg``: degrees 1, 1, 1, 2, 2, 3 for
+    ``leg`` 1 or 2, but a different neighbourhood of the node of degree 3."""
+    return 6, np.array([[0, 1], [1, 2], [2, 3], [3, 4], [leg, 5]])
+
+
+def pattern_counts(fields, **params):
+    features = GraphFeatures(pairs=False, **params).fit(fields)
+    names = list(features.get_feature_names_out())
+    X = features.transform(fields)
+    iterations = features.wl_iterations + 1
+    columns = [
+        [names.index(f"wl{i}_{k}") for k in range(features.wl_buckets)] for i in range(iterations)
+    ]
+    return [[row[c] for c in columns] for row in X]
+
+
+def test_graph_features_weisfeiler_lehman_patterns_of_known_graphs():
+    fields = eigen().fit_transform([star(5), cycle(6), spider(1), spider(2)])
+    # buckets enough for these few patterns not to share one
+    star5, cycle6, spider1, spider2 = pattern_counts(fields, wl_iterations=2, wl_buckets=1000)
+    # iteration 0: the degree histogram (a centre of degree 4, four leaves)
+    np.testing.assert_array_equal(star5[0], np.r_[0, 4, 0, 0, 1, np.zeros(995)])
+    # one pattern per kind of node at every iteration: centre and leaves, all of a cycle
+    for counts in star5[1:]:
+        assert sorted(counts[counts > 0]) == [1, 4]
+    for counts in cycle6[1:]:
+        assert sorted(counts[counts > 0]) == [6]
+    # the same degrees, told apart by the neighbourhood of the node of degree 3
+    np.testing.assert_array_equal(spider1[0], spider2[0])
+    assert not np.array_equal(spider1[1], spider2[1])
+    # spider(2) at iteration 1: leaves 0 and 4 (next to a degree 2), leaf 5 (next to the
+    # degree 3), nodes 1 and 3 (degree 2 between a leaf and the degree 3), node 2
+    assert sorted(spider2[1][spider2[1] > 0]) == [1, 1, 2, 2]
+    # degrees from wl_buckets - 1 up share the last bin
+    np.testing.assert_array_equal(pattern_counts(fields[:1], wl_buckets=3)[0][0], [0, 4, 1])
+
+
+def test_graph_features_patterns_ignore_the_order_of_the_nodes():
+    order = np.array([3, 5, 0, 4, 1, 2])
+    n, edges = spider(2)
+    relabelled = (n, np.sort(order[edges], axis=1))
+    a, b = pattern_counts(eigen().fit_transform([spider(2), relabelled]), wl_iterations=3)
+    for before, after in zip(a, b, strict=True):
+        np.testing.assert_array_equal(before, after)
+
+
+def test_graph_features_without_patterns():
+    fields = eigen().fit_transform([cycle(5)])
+    features = GraphFeatures(wl_iterations=0).fit(fields)
+    assert not any(name.startswith("wl") for name in features.get_feature_names_out())
+    assert features.transform(fields).shape == (1, features.n_features_out_)
+    with pytest.raises(ValueError, match="wl_buckets"):
+        GraphFeatures(wl_buckets=1).fit(fields)

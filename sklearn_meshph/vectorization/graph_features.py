@@ -1,6 +1,7 @@
 """Structure and spectrum of graphs as features: what the graph pipeline adds to the
 diagrams of its signatures (size, degrees, the spectrum's histogram, the signatures'
-quantiles, and histograms of the distances between pairs of nodes)."""
+quantiles, histograms of the distances between pairs of nodes, and hashed counts of the
+Weisfeiler-Lehman patterns of the degrees)."""
 
 from __future__ import annotations
 
@@ -43,6 +44,11 @@ _HARMONIC_RANGE = (0.05, 50.0)
 # Dense pair matrices above this many nodes would not fit a laptop's memory.
 _MAX_PAIR_NODES = 4000
 _ZERO = 1e-8
+# splitmix64's constants: a fixed, platform-independent hash of the pattern labels.
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX = (np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
+_SHIFTS = (np.uint64(30), np.uint64(27), np.uint64(31))
+_PRIME = np.uint64(1000003)
 
 
 def _adjacency(field: ScalarField) -> sp.csr_matrix:
@@ -124,6 +130,36 @@ def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
     ]
 
 
+def _mix(labels: np.ndarray) -> np.ndarray:
+    """splitmix64 of each label (uint64 arithmetic wraps around by design)."""
+    with np.errstate(over="ignore"):
+        x = labels + _GOLDEN
+        x = (x ^ (x >> _SHIFTS[0])) * _MIX[0]
+        x = (x ^ (x >> _SHIFTS[1])) * _MIX[1]
+        return x ^ (x >> _SHIFTS[2])
+
+
+def _patterns(edges: np.ndarray, n: int, iterations: int, buckets: int) -> np.ndarray:
+    """Counts of the Weisfeiler-Lehman patterns of the degrees, hashed into buckets.
+
+    Iteration 0 is the degree histogram (degrees from ``buckets - 1`` up share the last
+    bin); each further iteration relabels every node by a hash of its label and the
+    multiset of its neighbours' labels (a sum of their hashes, which ignores the
+    order), and counts the new labels modulo ``buckets``.
+    """
+    source, target = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
+    degree = np.bincount(source, minlength=n)
+    counts = [np.bincount(np.minimum(degree, buckets - 1), minlength=buckets)]
+    labels = degree.astype(np.uint64)
+    for _ in range(iterations):
+        neighbours = np.zeros(n, dtype=np.uint64)
+        with np.errstate(over="ignore"):
+            np.add.at(neighbours, source, _mix(labels[target]))
+            labels = _mix(labels * _PRIME + neighbours)
+        counts.append(np.bincount((labels % np.uint64(buckets)).astype(np.intp), minlength=buckets))
+    return np.concatenate(counts).astype(np.float64)
+
+
 class GraphFeatures(SampleTransformer):
     """Structure and spectrum of each graph as a row of features.
 
@@ -144,7 +180,14 @@ class GraphFeatures(SampleTransformer):
       normalized Laplacian (``L+[i, i] + L+[j, j] - 2 L+[i, j]``, its pseudo-inverse
       ``L+``, in ``n_pair_bins`` log-spaced bins), as fractions of the pairs, the
       share of unreachable pairs (different components), the mean and largest hop
-      distance. A spectral cousin of FGSD's histograms of spectral distances.
+      distance. A spectral cousin of FGSD's histograms of spectral distances [1]_;
+    - with ``wl_iterations > 0``, the Weisfeiler-Lehman subtree patterns [2]_ with the
+      degrees as initial labels: the degree histogram (``wl_buckets`` bins, the last
+      one for the larger degrees), then for each iteration the counts of the nodes'
+      new labels (a node's label and the multiset of its neighbours' labels, hashed
+      by a fixed 64-bit hash) modulo ``wl_buckets``. Learned from no data, so the same
+      graph always gives the same counts; on molecules the patterns stand in for the
+      atom types a structure-only dataset lacks.
 
     The graph is read as unweighted (its edges). The pair histograms cost a dense
     eigendecomposition of each graph (cubic in its nodes) and refuse graphs of more
@@ -160,6 +203,11 @@ class GraphFeatures(SampleTransformer):
         Hop distances with a bin of their own; farther pairs share one.
     n_pair_bins : int, default=30
         Bins of the harmonic distance's histogram.
+    wl_iterations : int, default=3
+        Weisfeiler-Lehman iterations after the degree histogram; 0 leaves out the
+        patterns (and the degree histogram).
+    wl_buckets : int, default=64
+        Bins of the degree histogram and of each iteration's hashed pattern counts.
 
     Attributes
     ----------
@@ -177,6 +225,8 @@ class GraphFeatures(SampleTransformer):
     ----------
     .. [1] S. Verma and Z.-L. Zhang, "Hunt For The Unique, Stable, Sparse And Fast
        Feature Learning On Graphs", NeurIPS 2017.
+    .. [2] N. Shervashidze, P. Schweitzer, E. J. van Leeuwen, K. Mehlhorn and
+       K. M. Borgwardt, "Weisfeiler-Lehman Graph Kernels", JMLR 12, 2011.
 
     Examples
     --------
@@ -196,13 +246,19 @@ class GraphFeatures(SampleTransformer):
         "pairs": ["boolean"],
         "max_hops": [Interval(Integral, 1, None, closed="left")],
         "n_pair_bins": [Interval(Integral, 2, None, closed="left")],
+        "wl_iterations": [Interval(Integral, 0, None, closed="left")],
+        "wl_buckets": [Interval(Integral, 2, None, closed="left")],
     }
 
-    def __init__(self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30):
+    def __init__(
+        self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30, wl_iterations=3, wl_buckets=64
+    ):
         self.n_bins = n_bins
         self.pairs = pairs
         self.max_hops = max_hops
         self.n_pair_bins = n_pair_bins
+        self.wl_iterations = wl_iterations
+        self.wl_buckets = wl_buckets
 
     def _fields(self, X, n_functions=None) -> list[ScalarField]:
         fields = self._check_samples(X)
@@ -268,6 +324,10 @@ class GraphFeatures(SampleTransformer):
             parts = [_size(adjacency), _spectrum(field.spectrum, self.n_bins), _signatures(values)]
             if self.pairs:
                 parts.append(_pairs(adjacency, self.max_hops, self.n_pair_bins))
+            if self.wl_iterations:
+                parts.append(
+                    _patterns(field.edges, field.n_vertices, self.wl_iterations, self.wl_buckets)
+                )
             rows.append(np.concatenate(parts))
         return np.array(rows)
 
@@ -283,6 +343,10 @@ class GraphFeatures(SampleTransformer):
             names += [f"hops_{h}" for h in range(1, self.max_hops + 1)] + ["hops_farther"]
             names += [f"harmonic_{k}" for k in range(self.n_pair_bins)]
             names += ["unreachable_pairs", "hops_mean", "hops_max"]
+        if self.wl_iterations:
+            names += [
+                f"wl{i}_{k}" for i in range(self.wl_iterations + 1) for k in range(self.wl_buckets)
+            ]
         return names
 
     def get_feature_names_out(self, input_features=None):
