@@ -1,0 +1,307 @@
+"""The default pipeline's two costly stages on a dask.distributed cluster.
+
+    python benchmarks/bench_cluster.py [--per-class 5] [--copies 10] [--json FILE]
+
+A ``LocalCluster`` of 2 worker processes against one of 1, through
+``joblib.parallel_backend("dask")``, on the stages of ``make_mesh_distance()`` that
+hold the time: the eigen stage (one solve per mesh, no cache) on ``--per-class``
+meshes of each ``watertight_dev`` class (10 is all 200), and the distance blocks of the
+default's diagram parts (each kind's 1-Wasserstein matrix) on their diagrams and
+``--copies - 1`` jittered copies of them (each point moved by up to 5% of its
+persistence), so that the matrices hold enough pairs to share. Each worker runs one
+task at a time, and both clusters show joblib 2 threads: joblib runs everything in
+the calling process when a cluster has a single thread, so the 1-worker cluster has
+two threads and one task slot (a worker resource), and both get the same tasks. Beside
+them, a local run on one core (the reference) and one on two loky workers. Every
+output is checked to be bitwise identical to the reference's.
+
+Reported: wall times and speed-ups (from the 1-worker cluster to the 2-worker one,
+target 1.7); from dask's task stream, each stage's tasks, their compute seconds on the
+workers (the work), the longest task (the least tail a schedule can leave) and the
+workers' busy share of the wall time; the CPU seconds of the calling process (its
+serial share: sending, receiving, assembling). Then the cost of shipping the meshes:
+their pickled bytes, and the seconds of one task per mesh that only receives it, the
+mesh sent with its task or scattered first, against the same tasks without a mesh.
+Workers are started and warmed (imports, numba's kernels loaded from its cache) before
+anything is timed; that start-up is reported apart.
+
+Wall times need a quiet machine with at least 2 cores: the speed-ups are meaningless
+while other jobs share the cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import time
+from contextlib import ExitStack
+
+import numpy as np
+from _common import DATA
+from joblib import parallel_backend
+from sklearn.base import clone
+
+from sklearn_meshph import load_mesh_folder, make_mesh_distance, make_shapes
+from sklearn_meshph.mesh.reading import read_mesh_file
+
+# Both clusters show joblib 2 threads (it runs in the caller when a cluster has 1),
+# so both get the same tasks; each worker runs one task at a time (a resource "slot").
+WORKERS = (1, 2)
+TARGET = 1.7
+
+
+def load(per_class):
+    """The ``watertight_dev`` meshes, the first ``per_class`` of each class (all: None)."""
+    bunch = load_mesh_folder(DATA / "watertight_dev", load=False)
+    y = np.asarray(bunch.target)
+    keep = [i for i in range(len(y)) if per_class is None or np.sum(y[:i] == y[i]) < per_class]
+    return [read_mesh_file(bunch.filenames[i]) for i in keep]
+
+
+def stages(n_jobs):
+    """The default's eigen stage (no cache) and its diagram parts: ``(eigen, [(kind,
+    persistence, distance), ...])``, every stage with ``n_jobs``."""
+    pipeline = make_mesh_distance(n_jobs=n_jobs)
+    eigen = pipeline.named_steps["eigen"]
+    parts = []
+    for kind, part in pipeline.named_steps["distance"].transformer_list:
+        steps = dict(part.steps)
+        if "persistence" in steps:
+            parts.append((kind, steps["persistence"], steps["distance"]))
+    return eigen, parts
+
+
+def jittered(diagrams, copies, seed=0):
+    """The samples, then ``copies - 1`` copies with each finite point moved by up to 5%
+    of its persistence (births and deaths kept in order)."""
+    rng = np.random.default_rng(seed)
+    out = list(diagrams)
+    for _ in range(copies - 1):
+        for sample in diagrams:
+            moved = []
+            for diagram in sample:
+                diagram = np.array(diagram, dtype=float)
+                finite = np.isfinite(diagram).all(axis=1)
+                span = diagram[finite, 1] - diagram[finite, 0]
+                shift = rng.uniform(-0.05, 0.05, size=(finite.sum(), 2)) * span[:, None] / 2
+                diagram[finite] = diagram[finite] + shift
+                moved.append(diagram)
+            out.append(tuple(moved))
+    return out
+
+
+def run_stages(meshes, diagrams, n_jobs):
+    """Wall times and outputs of the eigen stage and of each kind's distance matrix."""
+    eigen, parts = stages(n_jobs)
+    start = time.perf_counter()
+    fields = eigen.fit_transform(meshes)
+    times = {"eigen": time.perf_counter() - start}
+    matrices = {}
+    start = time.perf_counter()
+    for kind, _, distance in parts:
+        matrices[kind] = clone(distance).fit_transform(diagrams[kind])
+    times["distances"] = time.perf_counter() - start
+    return times, fields, matrices
+
+
+def check_identical(fields, matrices, reference, label):
+    ref_fields, ref_matrices = reference
+    for i, (a, b) in enumerate(zip(fields, ref_fields, strict=True)):
+        for name in ("values", "vertices", "faces", "eigenvalues"):
+            x, z = getattr(a, name), getattr(b, name)
+            assert (x is None and z is None) or np.array_equal(x, z), (
+                f"{label}: mesh {i}: {name} differ from the local run"
+            )
+    for kind, matrix in matrices.items():
+        assert np.array_equal(matrix, ref_matrices[kind]), (
+            f"{label}: the {kind} distances differ from the local run"
+        )
+
+
+def task_summary(records, wall, n_workers):
+    """Compute seconds per task from dask's task stream, and the workers' busy share."""
+    computes = [
+        sum(s["stop"] - s["start"] for s in r["startstops"] if s["action"] == "compute")
+        for r in records
+    ]
+    computes = np.asarray(computes) if computes else np.zeros(1)
+    return {
+        "tasks": len(records),
+        "compute_s": float(computes.sum()),
+        "largest_task_s": float(computes.max()),
+        "median_task_s": float(np.median(computes)),
+        "busy": float(computes.sum() / (wall * n_workers)),
+    }
+
+
+def _warm():
+    """Imports and numba's kernels of the whole default, on a worker."""
+    meshes = make_shapes(n_per_class=1, classes=("blob", "snake"), random_state=0).data
+    make_mesh_distance(n_jobs=1).fit_transform(list(meshes))
+
+
+def _received(item):
+    return item is not None
+
+
+def shipping(client, meshes):
+    """Seconds to run one task per mesh that only receives it: the mesh sent with its
+    task, or scattered to the workers first (the scatter timed with its tasks), against
+    the same tasks without a mesh."""
+
+    def timed(arguments):
+        start = time.perf_counter()
+        client.gather([client.submit(_received, a, pure=False) for a in arguments])
+        return time.perf_counter() - start
+
+    empty = timed([0] * len(meshes))
+    with_tasks = timed(meshes)
+    start = time.perf_counter()
+    futures = client.scatter(meshes)
+    scattered = time.perf_counter() - start + timed(futures)
+    return {
+        "empty_tasks_s": empty,
+        "with_each_task_s": with_tasks,
+        "scatter_then_tasks_s": scattered,
+    }
+
+
+def on_cluster(n_workers, meshes, diagrams, reference):
+    from distributed import Client, LocalCluster, get_task_stream
+
+    with ExitStack() as stack:
+        start = time.perf_counter()
+        cluster = stack.enter_context(
+            LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=max(WORKERS) // n_workers,
+                resources={"slot": 1},
+                processes=True,
+                dashboard_address=None,
+            )
+        )
+        client = stack.enter_context(Client(cluster))
+        client.wait_for_workers(n_workers)
+        client.run(_warm)
+        result = {"start_and_warm_s": time.perf_counter() - start}
+        with parallel_backend("dask", resources={"slot": 1}):
+            eigen, parts = stages(n_jobs=-1)
+            with get_task_stream(client) as stream:
+                start, cpu = time.perf_counter(), time.process_time()
+                fields = eigen.fit_transform(meshes)
+                wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+            summary = task_summary(stream.data, wall, n_workers)
+            result["eigen"] = {"wall_s": wall, "client_cpu_s": cpu, **summary}
+            matrices, records, wall, cpu = {}, [], 0.0, 0.0
+            for kind, _, distance in parts:
+                with get_task_stream(client) as stream:
+                    start, begun = time.perf_counter(), time.process_time()
+                    matrices[kind] = clone(distance).fit_transform(diagrams[kind])
+                    wall += time.perf_counter() - start
+                    cpu += time.process_time() - begun
+                records += stream.data
+            summary = task_summary(records, wall, n_workers)
+            result["distances"] = {"wall_s": wall, "client_cpu_s": cpu, **summary}
+        check_identical(fields, matrices, reference, f"{n_workers} dask worker(s)")
+        if n_workers == max(WORKERS):
+            result["shipping"] = shipping(client, meshes)
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--per-class", type=int, default=5, help="meshes per class (of 10)")
+    parser.add_argument("--copies", type=int, default=10, help="copies of each diagram sample")
+    parser.add_argument("--json", default=None, help="write the results to this file")
+    args = parser.parse_args()
+
+    start = time.perf_counter()
+    meshes = load(args.per_class)
+    sizes = np.array([len(m.vertices) for m in meshes])
+    nbytes = [len(pickle.dumps(m, protocol=5)) for m in meshes]
+    print(
+        f"{len(meshes)} meshes, {sizes.min()} to {sizes.max()} vertices "
+        f"(median {int(np.median(sizes))}), {sum(nbytes) / 1e6:.1f} MB pickled; "
+        f"loaded in {time.perf_counter() - start:.1f} s"
+    )
+
+    # The reference: one core, in this process.
+    eigen, parts = stages(n_jobs=1)
+    start, cpu = time.perf_counter(), time.process_time()
+    ref_fields = eigen.fit_transform(meshes)
+    local = {"eigen": time.perf_counter() - start}
+    eigen_cpu = time.process_time() - cpu
+    diagrams = {
+        kind: jittered(persistence.fit_transform(ref_fields), args.copies)
+        for kind, persistence, _ in parts
+    }
+    start, cpu = time.perf_counter(), time.process_time()
+    ref_matrices = {kind: clone(d).fit_transform(diagrams[kind]) for kind, _, d in parts}
+    local["distances"] = time.perf_counter() - start
+    distances_cpu = time.process_time() - cpu
+    reference = (ref_fields, ref_matrices)
+    n_samples = len(diagrams[parts[0][0]])
+    print(
+        f"local, 1 core: eigen {local['eigen']:.1f} s (CPU {eigen_cpu:.1f} s), "
+        f"distances of {len(parts)} kinds x {n_samples} samples {local['distances']:.1f} s "
+        f"(CPU {distances_cpu:.1f} s)"
+    )
+
+    with parallel_backend("loky", n_jobs=2):
+        loky, fields, matrices = run_stages(meshes, diagrams, n_jobs=2)
+    check_identical(fields, matrices, reference, "loky")
+    del fields, matrices
+
+    results = {n: on_cluster(n, meshes, diagrams, reference) for n in WORKERS}
+    print("results bitwise identical to the local run: loky and every cluster")
+    print()
+    print("| run | eigen, s | speed-up | distances, s | speed-up |")
+    print("|---|---:|---:|---:|---:|")
+    base = results[1]
+    print(f"| local, 1 core | {local['eigen']:.1f} | | {local['distances']:.1f} | |")
+    print(
+        f"| loky, 2 workers | {loky['eigen']:.1f} | {local['eigen'] / loky['eigen']:.2f} "
+        f"(of local) | {loky['distances']:.1f} | "
+        f"{local['distances'] / loky['distances']:.2f} (of local) |"
+    )
+    for n, r in results.items():
+        print(
+            f"| dask, {n} worker(s) | {r['eigen']['wall_s']:.1f} | "
+            f"{base['eigen']['wall_s'] / r['eigen']['wall_s']:.2f} | "
+            f"{r['distances']['wall_s']:.1f} | "
+            f"{base['distances']['wall_s'] / r['distances']['wall_s']:.2f} |"
+        )
+    print()
+    for stage in ("eigen", "distances"):
+        speedup = base[stage]["wall_s"] / results[max(WORKERS)][stage]["wall_s"]
+        verdict = "met" if speedup >= TARGET else "NOT met"
+        print(f"{stage}: speed-up {speedup:.2f} from 1 to 2 workers, target {TARGET}: {verdict}")
+    print()
+    print("| cluster, stage | tasks | work, s | longest task, s | busy | caller CPU, s |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for n, r in results.items():
+        for stage in ("eigen", "distances"):
+            s = r[stage]
+            print(
+                f"| {n} worker(s), {stage} | {s['tasks']} | {s['compute_s']:.1f} | "
+                f"{s['largest_task_s']:.2f} | {s['busy']:.0%} | {s['client_cpu_s']:.1f} |"
+            )
+    ship = results[max(WORKERS)]["shipping"]
+    print()
+    print(
+        f"shipping {len(meshes)} meshes ({sum(nbytes) / 1e6:.1f} MB pickled) to 2 workers: "
+        f"with each task {ship['with_each_task_s']:.2f} s, scattered first "
+        f"{ship['scatter_then_tasks_s']:.2f} s, the same tasks without a mesh "
+        f"{ship['empty_tasks_s']:.2f} s; workers started and warmed in "
+        + ", ".join(f"{r['start_and_warm_s']:.1f} s ({n})" for n, r in results.items())
+    )
+    if args.json:
+        with open(args.json, "w") as out:
+            payload = {"local": local, "loky": loky, "meshes": len(meshes)}
+            payload["mesh_bytes"] = sum(nbytes)
+            json.dump({**payload, "dask": {str(n): r for n, r in results.items()}}, out, indent=1)
+
+
+if __name__ == "__main__":
+    main()
