@@ -2,6 +2,7 @@
 
     python benchmarks/learning_quality.py [--collections watertight_dev sumner shapes]
                                           [--n-jobs 2] [--cache DIR] [--clouds]
+                                          [--no-models] [--no-features] [--no-gh]
     python benchmarks/learning_quality.py --clouds-only [--densities 1000 3000 10000]
                                           [--noises 0 0.005] [--cloud-subset N]
                                           [--scans noise density holes outliers]
@@ -16,7 +17,12 @@ and the Sumner meshes (from SKLEARN_MESHPH_DATA, default ../shared/data) and
 ``make_shapes``. The baselines (Shape-DNA, and the Gromov-Hausdorff signatures of
 ``gh_signatures.py`` that the paper compares itself with, unless ``--no-gh``) run in the
 same process; learned models on the default's diagrams are scored by nested
-cross-validation (unless ``--no-models``).
+cross-validation (unless ``--no-models``), and so is the linear-cost path
+``make_mesh_features()`` (``linear_path.py``: 1-NN with its configuration chosen inside
+each training split, linear models; unless ``--no-features``). The retrieval measures
+of the SHREC contests (``retrieval_scores``: nearest neighbour, first and second tier,
+DCG, mean average precision) of the default and of the ``"features"`` preset are
+printed after the tables.
 
 With ``--clouds`` (after the mesh tables) or ``--clouds-only`` (alone), the point-cloud
 section: points sampled on each mesh's surface with ``sample_point_cloud`` at each of
@@ -42,6 +48,7 @@ import warnings
 import joblib
 import numpy as np
 from _common import DATA, collection, cv_1nn, folds, loo_1nn
+from linear_path import nested_features, print_nested_features, print_rows
 from sklearn.base import clone
 from sklearn.model_selection import (
     GridSearchCV,
@@ -58,6 +65,7 @@ from sklearn_meshph import (
     MeshCleaningWarning,
     ShapeDNA,
     make_mesh_distance,
+    retrieval_scores,
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import check_mesh
@@ -96,7 +104,7 @@ def configurations(memory, n_jobs):
         distance__weights={"ext0": 0.5, "ext1": 0.0, "dna": 0.5}
     )
     return {
-        "default (make_mesh_distance())": split(default),
+        DEFAULT: split(default),
         '"eigenfunctions", 0.1\'s default (eigenfunctions 1-3, symmetric H0, bottleneck)': split(
             make_mesh_distance("eigenfunctions", **preset)
         ),
@@ -124,7 +132,14 @@ def configurations(memory, n_jobs):
         "WKS x5 alone, extended, W1": alone("wks", n_jobs, memory, n_eigenpairs=56, n_scales=5),
         "default without Shape-DNA": split(without_dna),
         "default without essential H1": split(without_ext1),
+        FEATURES: split(make_mesh_distance("features", **preset)),
     }
+
+
+DEFAULT = "default (make_mesh_distance())"
+FEATURES = 'linear-cost features, Euclidean (make_mesh_distance("features"))'
+#: The configurations whose retrieval measures are printed.
+RETRIEVED = (DEFAULT, FEATURES)
 
 
 def median_scale(block):
@@ -281,6 +296,12 @@ def main():
         "--no-models", dest="models", action="store_false", help="skip the learned models"
     )
     parser.add_argument(
+        "--no-features",
+        dest="features",
+        action="store_false",
+        help="skip the nested cross-validation of the linear-cost features (linear_path.py)",
+    )
+    parser.add_argument(
         "--no-gh",
         dest="gh",
         action="store_false",
@@ -352,7 +373,9 @@ def run(args, memory):
             seconds = time.perf_counter() - start
             results[config, name] = (loo_1nn(matrix, y), cv_1nn(matrix, y), seconds)
             print(f"  {name:15s} {config}: {results[config, name][0]:.3f}", flush=True)
-            if config.startswith("default ("):
+            if config in RETRIEVED:
+                results["retrieval", config, name] = retrieval_scores(matrix, y)
+            if config == DEFAULT:
                 default_fields, default_distance = fields, distances
         if args.gh:
             gh_comparator(meshes, y, args.n_jobs, results, name)
@@ -362,6 +385,8 @@ def run(args, memory):
         results["nested", name] = nested
         if args.models:
             results["models", name] = nested_models(default_fields, y, args.n_jobs)
+        if args.features:
+            results["features", name] = nested_features(default_fields, y)
         largest = max(meshes, key=lambda m: len(m.vertices))
         results["memory", name] = (
             len(largest.vertices),
@@ -394,7 +419,7 @@ def run(args, memory):
     )
     print("|---|---|---|---|---|---|---|")
     for n in names:
-        ratio = results["default (make_mesh_distance())", n][0] / results[baseline, n][0]
+        ratio = results[DEFAULT, n][0] / results[baseline, n][0]
         vertices, small, large = results["memory", n]
         print(
             f"| {n} | {ratio:.3f} | {results['nested', n]:.3f} | {loading[n]:.1f} | "
@@ -409,21 +434,33 @@ def run(args, memory):
         print("|---|" + "---|---|" * len(names))
         rows = {
             "default 1-NN (10 x 5-fold, no tuning)": {
-                n: (results["default (make_mesh_distance())", n][1], 0.0, float("nan"))
-                for n in names
+                n: (results[DEFAULT, n][1], 0.0, float("nan")) for n in names
             }
         }
         for n in names:
             for model, value in results["models", n].items():
                 rows.setdefault(model, {})[n] = value
-        for model, per in rows.items():
-            cells = []
-            for n in names:
-                mean, std, seconds = per.get(n, (float("nan"),) * 3)
-                cells += [f"{mean:.3f} +/- {std:.3f}", f"{seconds:.0f}"]
-            print(f"| {model} | " + " | ".join(cells) + " |")
+        print_rows(rows, names)
+    print_retrieval(results, names)
+    if args.features:
+        print_nested_features(results, names)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak resident memory of this process: {peak:.0f} MB")
+
+
+def print_retrieval(results, names):
+    """The retrieval measures of the SHREC contests (``retrieval_scores``) of the
+    configurations of RETRIEVED, each mesh querying all the others of the full matrix."""
+    print("\nRetrieval measures (each mesh queries all the others):\n")
+    measures = ("nearest_neighbor", "first_tier", "second_tier", "dcg", "mean_average_precision")
+    print("| collection | configuration | " + " | ".join(measures) + " |")
+    print("|---|---|" + "---|" * len(measures))
+    for n in names:
+        for config in RETRIEVED:
+            scores = results.get(("retrieval", config, n))
+            if scores is not None:
+                cells = " | ".join(f"{scores[m]:.3f}" for m in measures)
+                print(f"| {n} | {config} | {cells} |")
 
 
 def subset(y, per_class):
