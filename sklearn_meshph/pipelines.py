@@ -53,6 +53,8 @@ _GRAPH_TIMES = (0.1, 10.0)
 _GRAPH_CLASSIFIER_TIMES = (0.1, 1.0, 10.0)
 _GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
 _GRAPH_TREES = 300
+# Weisfeiler-Lehman iterations of make_graph_classifier's GraphFeatures.
+_GRAPH_WL_ITERATIONS = 3
 
 
 def _kind_persistence(kind, common):
@@ -465,8 +467,9 @@ def make_graph_classifier(
     - ``"features"``: a ``FeatureUnion`` of ``"diagrams"`` (:class:`LowerStarPersistence`
       with ``filtration="extended"``: the four diagrams of each signature on the graph,
       then :class:`DiagramStatistics`) and ``"graph"`` (:class:`GraphFeatures`: size,
-      degrees, the spectrum's histogram, the signatures' quantiles and histograms of
-      the distances between pairs of nodes);
+      degrees, the spectrum's histogram, the signatures' quantiles, histograms of
+      the distances between pairs of nodes, and hashed counts of the
+      Weisfeiler-Lehman patterns of the degrees);
     - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
       features of very different ranges and no tuning.
 
@@ -529,6 +532,7 @@ def make_graph_classifier(
             ("statistics", DiagramStatistics(n_jobs=n_jobs)),
         ]
     )
-    features = FeatureUnion([("diagrams", diagrams), ("graph", GraphFeatures())])
+    graph = GraphFeatures(wl_iterations=_GRAPH_WL_ITERATIONS)
+    features = FeatureUnion([("diagrams", diagrams), ("graph", graph)])
     trees = ExtraTreesClassifier(n_estimators, n_jobs=n_jobs, random_state=random_state)
     return Pipeline([("eigen", eigen), ("features", features), ("classifier", trees)])

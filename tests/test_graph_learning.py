@@ -69,6 +69,7 @@ def test_classifier_clone_pickle_params(graphs):
     assert params["eigen__laplacian"] == "normalized"
     assert params["eigen__times"] == (0.1, 1.0, 10.0)  # PersLay's two and t = 1
     assert params["features__diagrams__persistence__filtration"] == "extended"
+    assert params["features__graph__wl_iterations"] == 3  # the degrees' patterns
     assert clone(model).get_params()["classifier__random_state"] == 3
     model.fit(X, y)
     again = pickle.loads(pickle.dumps(model))
@@ -222,7 +223,9 @@ def test_graph_features_weisfeiler_lehman_patterns_of_known_graphs():
     # degree 3), nodes 1 and 3 (degree 2 between a leaf and the degree 3), node 2
     assert sorted(spider2[1][spider2[1] > 0]) == [1, 1, 2, 2]
     # degrees from wl_buckets - 1 up share the last bin
-    np.testing.assert_array_equal(pattern_counts(fields[:1], wl_buckets=3)[0][0], [0, 4, 1])
+    np.testing.assert_array_equal(
+        pattern_counts(fields[:1], wl_iterations=1, wl_buckets=3)[0][0], [0, 4, 1]
+    )
 
 
 def test_graph_features_patterns_ignore_the_order_of_the_nodes():
@@ -236,7 +239,7 @@ def test_graph_features_patterns_ignore_the_order_of_the_nodes():
 
 def test_graph_features_without_patterns():
     fields = eigen().fit_transform([cycle(5)])
-    features = GraphFeatures(wl_iterations=0).fit(fields)
+    features = GraphFeatures().fit(fields)  # the default: no patterns
     assert not any(name.startswith("wl") for name in features.get_feature_names_out())
     assert features.transform(fields).shape == (1, features.n_features_out_)
     with pytest.raises(ValueError, match="wl_buckets"):

@@ -203,9 +203,9 @@ class GraphFeatures(SampleTransformer):
         Hop distances with a bin of their own; farther pairs share one.
     n_pair_bins : int, default=30
         Bins of the harmonic distance's histogram.
-    wl_iterations : int, default=3
+    wl_iterations : int, default=0
         Weisfeiler-Lehman iterations after the degree histogram; 0 leaves out the
-        patterns (and the degree histogram).
+        patterns and the degree histogram (:func:`make_graph_classifier` uses 3).
     wl_buckets : int, default=64
         Bins of the degree histogram and of each iteration's hashed pattern counts.
 
@@ -251,7 +251,7 @@ class GraphFeatures(SampleTransformer):
     }
 
     def __init__(
-        self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30, wl_iterations=3, wl_buckets=64
+        self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30, wl_iterations=0, wl_buckets=64
     ):
         self.n_bins = n_bins
         self.pairs = pairs
