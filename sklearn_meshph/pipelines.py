@@ -1,5 +1,6 @@
 """Ready-made pipelines from meshes (or graphs) to a precomputed distance matrix: the
 library's default, chosen by cross-validation, and the settings it is compared with; the
+default's diagrams and spectrum as fixed-length features (the linear-cost path); the
 graph classifier; and every option family of the package, for the documentation's
 tables."""
 
