@@ -24,7 +24,7 @@ from sklearn_meshph import (
     make_shapes,
     retrieval_scores,
 )
-from sklearn_meshph.retrieval.parts import N_TOP
+from sklearn_meshph.retrieval.parts import N_TOP, IndexedPart
 
 
 def _diagrams(X):
@@ -130,7 +130,7 @@ def test_lower_bounds_never_exceed_the_exact_distances(seed, params):
     train = _collection(seed, 12, n_points=3 * N_TOP, essential=(0, 1))
     index = ShapeNeighbors(_combined(**params), scale_samples=None).fit(train)
     query = index._represent(train[:4])
-    lower, exact = index._lower(query), index._exact(query, np.arange(12))
+    lower, exact = sum(index._lower(query)), index._exact(query, np.arange(12))
     assert np.all(lower <= exact * (1 + 1e-12))
     # The bounds are not trivial: the feature part is exact, the diagram part positive.
     assert np.mean(lower[np.isfinite(exact)] / exact[np.isfinite(exact)].clip(1e-300)) > 0.3
@@ -315,3 +315,48 @@ def test_retrieval_scores_refuse_what_they_cannot_score():
     D[1, 0] = np.nan
     with pytest.raises(ValueError, match="sample 1: D holds NaN"):
         retrieval_scores(D, [0, 0])
+
+
+def _part(name):
+    def pick(X):
+        return [sample[name] for sample in X]
+
+    return Pipeline([("pick", FunctionTransformer(pick)), ("d", DiagramDistance())])
+
+
+def test_cheap_parts_are_computed_first_and_prune_the_costly_one(monkeypatch):
+    # "small": one point whose persistence is always 20 (its bound is 0) but whose place
+    # differs; "big": many points, nearly the same for every sample. Once a neighbour
+    # is known, the small part's exact distances rule most candidates out before their
+    # big part is computed.
+    rng = np.random.default_rng(0)
+    big = _diagram(rng, 3 * N_TOP, 0)
+
+    def sample(shift):
+        moved = big + rng.normal(0, 1e-3, big.shape)
+        moved[:, 1] = np.maximum(moved[:, 1], moved[:, 0])
+        return {"small": (np.array([[shift, shift + 20.0]]),), "big": (moved,)}
+
+    train = [sample(shift) for shift in rng.uniform(0, 10, 60)]
+    queries = [sample(shift) for shift in (0.0, 5.0, 10.0)]
+    metric = CombinedDistance([("small", _part("small")), ("big", _part("big"))])
+    index = ShapeNeighbors(metric, n_neighbors=2, scale_samples=None).fit(train)
+    names = {id(part): name for name, _, _, part in index._parts}
+    computed = {"small": 0, "big": 0}
+    exact = IndexedPart.exact
+
+    def counted(self, query, cols):
+        computed[names[id(self)]] += len(cols)
+        return exact(self, query, cols)
+
+    monkeypatch.setattr(IndexedPart, "exact", counted)
+    distances, indices = index.kneighbors(queries)
+    monkeypatch.undo()
+    expected_distances, expected_indices = _brute_force(
+        clone(metric).fit(train).transform(queries), 2
+    )
+    np.testing.assert_array_equal(indices, expected_indices)
+    np.testing.assert_array_equal(distances, expected_distances)
+    assert computed["big"] < computed["small"] / 2
+    # exact_fraction counts the candidates whose every part was computed.
+    assert np.sum(index.exact_fraction(queries)) * len(train) == computed["big"]

@@ -66,6 +66,14 @@ def _fitted_parts(metric):
     return parts
 
 
+def _total(terms):
+    """The sum of the parts' terms, in their order (the fitted metric's own order)."""
+    total = None
+    for term in terms:
+        total = term if total is None else total + term
+    return total
+
+
 def _blocks(n, size):
     return [(start, min(start + size, n)) for start in range(0, n, size)]
 
@@ -162,50 +170,80 @@ class _ShapeIndex(BaseEstimator):
 
         return self._part_rows(fields_of, len(samples))
 
+    def _term(self, part, query, cols):
+        """One part's term of the combined distance of query rows to the fitted samples
+        ``cols``: its exact distances times its factor."""
+        name, factor, _, indexed = part
+        matrix = np.asarray(indexed.exact(query[name], cols), dtype=float)
+        return matrix if factor is None else factor * matrix
+
     def _exact(self, query, cols):
         """The exact ``(n_queries, len(cols))`` distances of query rows to the fitted
         samples ``cols``, the parts combined as the fitted metric combines them."""
-        total = None
-        for name, factor, _, part in self._parts:
-            matrix = np.asarray(part.exact(query[name], cols), dtype=float)
-            term = matrix if factor is None else factor * matrix
-            total = term if total is None else total + term
-        return total
+        return _total(self._term(part, query, cols) for part in self._parts)
 
     def _lower(self, query):
-        """Lower bounds of the combined distance of query rows to every fitted sample."""
-        total = None
-        for (name, _, _, part), fitted in zip(self._parts, self._vectors, strict=True):
-            term = part.lower(part.embed(query[name]), fitted)
-            total = term if total is None else total + term
-        return total
+        """Lower bounds of each part's term of the combined distance of query rows to
+        every fitted sample: one ``(n_queries, n_fitted)`` array per part."""
+        return [
+            part.lower(part.embed(query[name]), fitted)
+            for (name, _, _, part), fitted in zip(self._parts, self._vectors, strict=True)
+        ]
+
+    def _stages(self, query):
+        """The parts in the order a query computes their exact terms: by the number of
+        diagram points of the query (feature parts first), the costliest last."""
+
+        def points(part):
+            name, _, _, indexed = part
+            return sum(len(d) for d in query[name][0]) if indexed.diagrams else 0
+
+        return sorted(range(len(self._parts)), key=lambda j: points(self._parts[j]))
+
+    def _batch(self, query, terms, cols, kth):
+        """The exact distances of a query to the candidates ``cols`` that can still be
+        among its nearest, and which those are. ``terms`` holds each part's lower bounds
+        of the candidates; part by part, cheapest first, the exact terms replace the
+        bounds, and a candidate whose bound so tightened exceeds the ``k``-th exact
+        distance ``kth`` found so far is dropped before its costlier terms."""
+        alive = np.ones(len(cols), dtype=bool)
+        for j in self._stages(query):
+            if np.isfinite(kth):
+                alive &= _total(terms) * (1.0 - SLACK) <= kth
+            if not alive.any():
+                return np.empty(0), cols[alive]
+            terms[j][alive] = self._term(self._parts[j], query, cols[alive])[0]
+        return _total(term[alive] for term in terms), cols[alive]
 
     def _select(self, query, lower, k, exclude):
         """The ``k`` nearest fitted samples of one query (ties: lowest index) and the
-        number of exact distances computed, best first by lower bound."""
-        order = np.argsort(lower, kind="stable")
+        number of them whose exact distance was computed, best first by lower bound
+        (``lower``: each part's lower bounds of the query's terms)."""
+        total = _total(lower)
+        order = np.argsort(total, kind="stable")
         if exclude is not None:
             order = order[order != exclude]
-        n_finite = int(np.sum(np.isfinite(lower[order])))
-        safe = lower[order[:n_finite]] * (1.0 - SLACK)
-        distances, indices = [], []
-        done, batch = 0, max(8, 2 * k)  # batches of one size: little computed in vain
+        n_finite = int(np.sum(np.isfinite(total[order])))
+        safe = total[order[:n_finite]] * (1.0 - SLACK)
+        distances, indices = [np.empty(0)], [np.empty(0, dtype=np.int64)]
+        done, batch, kth = 0, max(8, 2 * k), np.inf  # batches of one size
         while done < n_finite:
             cols = order[done : done + batch]
-            distances.append(self._exact(query, cols)[0])
-            indices.append(cols)
+            found, kept = self._batch(query, [term[cols] for term in lower], cols, kth)
+            distances.append(found)
+            indices.append(kept)
             done += len(cols)
-            if done >= k and done < n_finite:
+            if sum(len(d) for d in distances) >= k:
                 kth = np.partition(np.concatenate(distances), k - 1)[k - 1]
-                if safe[done] > kth:
+                if done < n_finite and safe[done] > kth:
                     break
-        if done < k:  # the samples whose essential points differ in number: at inf
-            extra = order[n_finite : n_finite + k - done]
-            distances.append(np.full(len(extra), np.inf))
-            indices.append(extra)
         distances, indices = np.concatenate(distances), np.concatenate(indices)
+        if len(distances) < k:  # the samples whose essential points differ in number: at inf
+            extra = order[n_finite : n_finite + k - len(distances)]
+            distances = np.concatenate([distances, np.full(len(extra), np.inf)])
+            indices = np.concatenate([indices, extra])
         best = np.lexsort((indices, distances))[:k]
-        return distances[best], indices[best], done
+        return distances[best], indices[best], len(distances)
 
     def _query(self, X, n_neighbors):
         """``(distances, indices, n_exact)`` of the ``n_neighbors`` nearest fitted samples
@@ -229,7 +267,7 @@ class _ShapeIndex(BaseEstimator):
             for i in range(stop - start):
                 one = {name: rows[i : i + 1] for name, rows in block.items()}
                 exclude = start + i if X is None else None
-                found = self._select(one, lower[i], k, exclude)
+                found = self._select(one, [term[i] for term in lower], k, exclude)
                 distances[start + i], indices[start + i], n_exact[start + i] = found
         return distances, indices, n_exact
 
@@ -257,8 +295,9 @@ class _ShapeIndex(BaseEstimator):
         return (distances, indices) if return_distance else indices
 
     def exact_fraction(self, X=None, n_neighbors=None):
-        """The fraction of the fitted samples whose exact distance a query computes (the
-        rest are pruned by their lower bounds): what :meth:`kneighbors` costs.
+        """The fraction of the fitted samples whose exact distance a query computes, every
+        part of it (the rest are pruned by their lower bounds, some after the exact terms
+        of their cheaper parts): what :meth:`kneighbors` costs.
 
         Parameters
         ----------
@@ -329,7 +368,9 @@ class ShapeNeighbors(_ShapeIndex):
     returns the same neighbours as sorting the rows of the fitted pipeline's
     ``transform`` (equal distances by lowest index), computing exact distances only for
     the candidates that cheap lower bounds cannot rule out (best first, until the
-    ``k``-th exact distance is at most the next lower bound).
+    ``k``-th exact distance is at most the next lower bound; within a batch of
+    candidates, the exact terms of the cheaper parts first, each tightening the bound
+    that may rule a candidate out before its costlier parts).
 
     Parameters
     ----------
