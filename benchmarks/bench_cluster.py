@@ -1,6 +1,7 @@
 """The default pipeline's two costly stages on a dask.distributed cluster.
 
     python benchmarks/bench_cluster.py [--per-class 5] [--copies 10] [--json FILE]
+    python benchmarks/bench_cluster.py --schedule
 
 A ``LocalCluster`` of 2 worker processes against one of 1, through
 ``joblib.parallel_backend("dask")``, on the stages of ``make_mesh_distance()`` that
@@ -24,6 +25,12 @@ their pickled bytes, and the seconds of one task per mesh that only receives it,
 mesh sent with its task or scattered first, against the same tasks without a mesh.
 Workers are started and warmed (imports, numba's kernels loaded from its cache) before
 anything is timed; that start-up is reported apart.
+
+``--schedule`` measures instead what the tasks allow, whatever the machine's load:
+the CPU seconds of each task run one at a time in this process (each mesh's solve,
+largest first as the eigen stage dispatches them; each block of pairs of each
+parallel call, cut as for 2 workers), and the speed-up of joblib's schedule (tasks in
+order, each to the first free worker) on 2 workers against 1.
 
 Wall times need a quiet machine with at least 2 cores: the speed-ups are meaningless
 while other jobs share the cores.
@@ -209,11 +216,66 @@ def on_cluster(n_workers, meshes, diagrams, reference):
     return result
 
 
+def _makespan(times, n_workers):
+    """The end of tasks of these durations given in order, each to the first free worker."""
+    free = np.zeros(n_workers)
+    for duration in times:
+        free[np.argmin(free)] += duration
+    return free.max()
+
+
+def schedule(meshes, copies):
+    """CPU seconds per task, one at a time here, and the 2-worker speed-up they allow."""
+    import sklearn_meshph.diagrams.pairwise as pairwise
+    from sklearn_meshph.spectral.transformer import _size_hint
+
+    eigen, parts = stages(n_jobs=1)
+    order = sorted(range(len(meshes)), key=lambda i: -_size_hint(meshes[i]))
+    fields, solves = [None] * len(meshes), []
+    for i in order:
+        start = time.process_time()
+        fields[i] = eigen.fit_transform([meshes[i]])[0]
+        solves.append(time.process_time() - start)
+    calls, block, matrix = [], pairwise._block, pairwise.pair_matrix
+
+    def timed_block(*args):
+        start = time.process_time()
+        values = block(*args)
+        calls[-1].append(time.process_time() - start)
+        return values
+
+    def counted_matrix(*args, **kwargs):
+        calls.append([])
+        return matrix(*args, **kwargs)
+
+    pairwise._block, pairwise.pair_matrix = timed_block, counted_matrix
+    pairwise.effective_n_jobs = lambda n_jobs: max(WORKERS)  # the blocks of 2 workers
+    total = 0.0
+    for _, persistence, distance in parts:
+        diagrams = jittered(persistence.fit_transform(fields), copies)
+        start = time.process_time()
+        clone(distance).fit_transform(diagrams)
+        total += time.process_time() - start
+    work = sum(map(sum, calls))
+    span = sum(_makespan(c, max(WORKERS)) for c in calls)
+    print(
+        f"eigen: {len(solves)} tasks, {sum(solves):.1f} CPU s, longest {max(solves):.2f} s; "
+        f"2 workers: speed-up {sum(solves) / _makespan(solves, max(WORKERS)):.3f}"
+    )
+    print(
+        f"distances: {len(calls)} parallel calls, {sum(map(len, calls))} tasks, "
+        f"{work:.1f} CPU s in the blocks of {total:.1f} s, longest "
+        f"{max(map(max, calls)):.2f} s; 2 workers: speed-up {work / span:.3f} "
+        f"({total / (total - work + span):.3f} with the caller's own share)"
+    )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--per-class", type=int, default=5, help="meshes per class (of 10)")
     parser.add_argument("--copies", type=int, default=10, help="copies of each diagram sample")
     parser.add_argument("--json", default=None, help="write the results to this file")
+    parser.add_argument("--schedule", action="store_true", help="CPU seconds per task only")
     args = parser.parse_args()
 
     start = time.perf_counter()
@@ -225,6 +287,8 @@ def main():
         f"(median {int(np.median(sizes))}), {sum(nbytes) / 1e6:.1f} MB pickled; "
         f"loaded in {time.perf_counter() - start:.1f} s"
     )
+    if args.schedule:
+        return schedule(meshes, args.copies)
 
     # The reference: one core, in this process.
     eigen, parts = stages(n_jobs=1)
