@@ -1,0 +1,176 @@
+"""The default pipeline's cost per mesh on watertight_dev, before and after the cheaper
+eigensolve, and its accuracy.
+
+    python benchmarks/bench_default_cost.py [--collection watertight_dev] [--out FILE]
+        [--memory-meshes 3] [--skip-former-accuracy]
+
+Runs ``make_mesh_distance()`` with ``memory=None`` (no eigen cache: every solve is
+done), ``n_jobs=1`` and one BLAS thread, and measures CPU time (``time.process_time``,
+meaningful on a shared machine where wall time is not). The eigen stage is timed mesh
+by mesh under two settings of the shift-invert solve, interleaved (each mesh solved by
+one, then the other, so that a load that changes during the run weighs on both alike):
+
+- ``former``: ARPACK to machine precision (``tol=0``) with a basis of twice the
+  eigenpairs plus one, the settings before issue 29;
+- ``current``: the library's (``_TOLERANCE``, ``_BASIS_RATIO`` of
+  ``sklearn_meshph.spectral.eigensolver``), solved again at the former settings when
+  the spectrum has repeated eigenvalues.
+
+The distance stage (extended persistence of the signatures, the four distance matrices
+and their combination) is then timed over all meshes, and the accuracy is leave-one-out
+1-NN on the full matrix of each setting. Loading is not counted. Peak memory per mesh is
+the growth of the resident set of a fresh process solving one mesh (the
+``--memory-meshes`` largest) over the same process after a warm-up on a small mesh
+(Linux: the high-water mark is reset through ``/proc/self/clear_refs`` first).
+``--memory-only`` measures that alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+
+import numpy as np
+from _common import DATA, loo_1nn
+
+from sklearn_meshph.spectral import eigensolver
+
+PEAK = r"""
+import sys
+sys.path.insert(0, sys.argv[3])
+from bench_default_cost import settings
+from sklearn_meshph import make_mesh_distance, make_shapes
+path, name = sys.argv[1], sys.argv[2]
+eigen = make_mesh_distance(memory=None, n_jobs=1).named_steps["eigen"]
+eigen.fit_transform(make_shapes(n_per_class=1, random_state=0, return_X_y=True)[0][:1])
+
+def status(field):
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) / 1e3 for line in f if line.startswith(field))
+
+with open("/proc/self/clear_refs", "w") as f:  # the peak so far (imports) forgotten
+    f.write("5")
+before = status("VmRSS:")
+with settings(name):
+    eigen.fit_transform([path])  # read, cleaned and solved
+print(status("VmHWM:") - before)
+"""
+
+# The solve's settings before issue 29: machine precision, a basis of 2k + 1 vectors,
+# no second solve (a tolerance of -1 finds no repeats).
+FORMER = {"_TOLERANCE": 0.0, "_BASIS_RATIO": 2.0, "_REPEATED_RTOL": -1.0}
+SETTINGS = ("former", "current")
+
+
+@contextmanager
+def settings(name):
+    """The eigensolver's settings ``name`` ("former" or "current") for the block."""
+    saved = {key: getattr(eigensolver, key) for key in FORMER}
+    if name == "former":
+        for key, value in FORMER.items():
+            setattr(eigensolver, key, value)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            setattr(eigensolver, key, value)
+
+
+def peak_memory(paths, name):
+    """Peak resident growth (MB) of a fresh process solving each mesh."""
+    out = []
+    for path in paths:
+        result = subprocess.run(
+            [sys.executable, "-c", PEAK, str(path), name, str(os.path.dirname(__file__))],
+            capture_output=True,
+            text=True,
+            check=True,
+            env={**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"},
+        )
+        out.append(float(result.stdout.split()[-1]))
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--collection", default="watertight_dev")
+    parser.add_argument("--memory-meshes", type=int, default=3)
+    parser.add_argument(
+        "--skip-former-accuracy",
+        action="store_true",
+        help="score the current settings only (the distance stage is not timed twice)",
+    )
+    parser.add_argument("--memory-only", action="store_true", help="peak memory alone")
+    parser.add_argument("--out", default=None, help="write the results as JSON")
+    args = parser.parse_args()
+
+    from sklearn_meshph import load_mesh_folder, make_mesh_distance
+
+    bunch = load_mesh_folder(DATA / args.collection)
+    meshes, y = bunch.data, np.asarray(bunch.target)
+    if args.memory_only:
+        largest = np.argsort([len(mesh.vertices) for mesh in meshes])[::-1][: args.memory_meshes]
+        for name in SETTINGS:
+            paths = [bunch.filenames[i] for i in largest]
+            sizes = [len(meshes[i].vertices) for i in largest]
+            print(name, dict(zip(sizes, peak_memory(paths, name), strict=True)))
+        return
+    pipe = make_mesh_distance(memory=None, n_jobs=1)
+    eigen, distance = pipe.named_steps["eigen"], pipe.named_steps["distance"]
+    eigen.fit_transform(meshes[:1])  # compiles what is compiled once per process
+    fields = {name: [] for name in SETTINGS}
+    seconds = {name: [] for name in SETTINGS}
+    for i, mesh in enumerate(meshes):
+        for name in SETTINGS:
+            with settings(name):
+                start = time.process_time()
+                fields[name].extend(eigen.fit_transform([mesh]))
+                seconds[name].append(time.process_time() - start)
+        if i % 20 == 19:
+            print(i + 1, {k: round(sum(v), 1) for k, v in seconds.items()}, flush=True)
+    sizes = [len(field.vertices) for field in fields["current"]]
+    largest = np.argsort(sizes)[::-1][: args.memory_meshes]
+    result = {"meshes": len(meshes), "vertices": int(np.sum(sizes))}
+    for name in SETTINGS:
+        eigen_seconds = float(np.sum(seconds[name]))
+        entry = {
+            "eigen_seconds": eigen_seconds,
+            "eigen_ms_per_mesh": 1e3 * eigen_seconds / len(meshes),
+            "peak_mb": dict(
+                zip(
+                    (str(sizes[i]) for i in largest),
+                    peak_memory([bunch.filenames[i] for i in largest], name),
+                    strict=True,
+                )
+            ),
+            "per_mesh_seconds": seconds[name],
+        }
+        if name == "current":
+            entry["max_relative_eigenvalue_change"] = max(  # the constant's 0 left out
+                float(np.max(np.abs(a.spectrum[1:] / b.spectrum[1:] - 1)))
+                for a, b in zip(fields["current"], fields["former"], strict=True)
+            )
+            entry["max_signature_change"] = max(
+                float(np.max(np.abs(a.values - b.values)))
+                for a, b in zip(fields["current"], fields["former"], strict=True)
+            )
+        if name == "current" or not args.skip_former_accuracy:
+            start = time.process_time()
+            matrix = distance.fit_transform(fields[name])
+            entry["distance_seconds"] = time.process_time() - start
+            entry["per_mesh_ms"] = 1e3 * (eigen_seconds + entry["distance_seconds"]) / len(meshes)
+            entry["loo_1nn"] = loo_1nn(matrix, y)
+        result[name] = entry
+        print(name, json.dumps({k: v for k, v in entry.items() if k != "per_mesh_seconds"}))
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(result, f)
+
+
+if __name__ == "__main__":
+    main()
