@@ -202,9 +202,9 @@ def build_chunk(folder, base_meshes, base_y, seed, start, stop, n_jobs=1):
     path = chunk_path(folder, seed, start, stop)
     if path.exists():
         return path
-    wall = time.perf_counter()
+    cpu = time.process_time()
     meshes, y, bases, remeshed = generate(base_meshes, base_y, seed, start, stop)
-    made = time.perf_counter() - wall
+    made = time.process_time() - cpu
     parts, seconds = representations(meshes, n_jobs=n_jobs)
     arrays = _arrays(parts)
     arrays.update(y=y, bases=bases, remeshed=remeshed)
@@ -228,7 +228,7 @@ def _chunks(n, chunk):
 def load_collection(folder, seed, n, chunk):
     """``(parts, info)`` of the first ``n`` samples of a built collection: the parts as
     :func:`representations` returns them, and ``info`` with ``y``, ``bases``,
-    ``remeshed``, ``n_vertices`` and the chunks' ``seconds`` (generation, eigen,
+    ``remeshed``, ``n_vertices`` and the chunks' CPU ``seconds`` (generation, eigen,
     later)."""
     parts, info = {}, {key: [] for key in ("y", "bases", "remeshed", "n_vertices", "seconds")}
     for start, stop in _chunks(n, chunk):
