@@ -173,6 +173,25 @@ def test_the_default_pipeline_on_meshes_matches_its_brute_force():
     assert set(index.rows_) == {"ord1", "ext0", "ext1", "dna"}
 
 
+def test_the_features_preset_nested_pipeline_matches_its_brute_force():
+    """The ``"features"`` preset ends in a pipeline (features, then their distance): the
+    index looks through it, and the learned grids and scales are those of ``fit``."""
+    meshes, _ = make_shapes(
+        n_per_class=2,
+        classes=("blob", "snake", "star"),
+        resolution=(10, 14),
+        random_state=1,
+        return_X_y=True,
+    )
+    preset = make_mesh_distance("features")
+    index = ShapeNeighbors(preset, n_neighbors=2, scale_samples=None).fit(meshes[:5])
+    brute = clone(preset).fit(meshes[:5])
+    distances, indices = index.kneighbors(meshes[5:])
+    expected_distances, expected_indices = _brute_force(brute.transform(meshes[5:]), 2)
+    np.testing.assert_array_equal(indices, expected_indices)
+    np.testing.assert_allclose(distances, expected_distances, rtol=1e-9)  # Euclidean rounding
+
+
 def test_scales_are_learned_on_scale_samples_drawn_from_the_fitted_samples():
     train = _collection(3, 40)
     index = ShapeNeighbors(_combined(), scale_samples=10, random_state=1).fit(train)

@@ -8,7 +8,7 @@ from numbers import Integral
 import numpy as np
 from numpy.lib.format import open_memmap
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
-from sklearn.pipeline import Pipeline
+from sklearn.pipeline import Pipeline, make_pipeline
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
@@ -26,11 +26,15 @@ SLACK = 1e-6
 
 
 def _split(distance):
-    """``(head, metric)``: the steps before the distance (or None) and the distance."""
-    head, metric = None, distance
-    if isinstance(distance, Pipeline):
-        metric = distance.steps[-1][1]
-        head = distance[:-1] if len(distance.steps) > 1 else None
+    """``(head, metric)``: the steps before the distance (or None) and the distance,
+    through nested pipelines (the ``"features"`` preset ends in a pipeline of features
+    then their distance)."""
+    heads, metric = [], distance
+    while isinstance(metric, Pipeline):
+        if len(metric.steps) > 1:
+            heads.append(metric[:-1])
+        metric = metric.steps[-1][1]
+    head = None if not heads else heads[0] if len(heads) == 1 else make_pipeline(*heads)
     if not (isinstance(metric, CombinedDistance) or is_indexable(metric)):
         raise TypeError(
             "distance must be a CombinedDistance, DiagramDistance or FeatureDistance, or a "
