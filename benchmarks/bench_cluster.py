@@ -12,7 +12,10 @@ default's diagram parts (each kind's 1-Wasserstein matrix) on their diagrams and
 persistence), so that the matrices hold enough pairs to share. Each worker runs one
 task at a time, and both clusters show joblib 2 threads: joblib runs everything in
 the calling process when a cluster has a single thread, so the 1-worker cluster has
-two threads and one task slot (a worker resource), and both get the same tasks. Beside
+two threads and one task slot (a worker resource), and both get the same tasks. The
+2-worker cluster has one thread per worker and no resource: dask never steals a task
+restricted to a resource, and the blocks of a diagram distance all read one scattered
+object, so with a resource they would all stay on the worker that holds it. Beside
 them, a local run on one core (the reference) and one on two loky workers. Every
 output is checked to be bitwise identical to the reference's.
 
@@ -179,11 +182,14 @@ def on_cluster(n_workers, meshes, diagrams, reference):
 
     with ExitStack() as stack:
         start = time.perf_counter()
+        # One task slot per worker: a resource where a worker needs two threads
+        # (joblib's count), none otherwise (a task restricted to one is never stolen).
+        slot = {"slot": 1} if n_workers < max(WORKERS) else None
         cluster = stack.enter_context(
             LocalCluster(
                 n_workers=n_workers,
                 threads_per_worker=max(WORKERS) // n_workers,
-                resources={"slot": 1},
+                resources=slot,
                 processes=True,
                 dashboard_address=None,
             )
@@ -192,7 +198,7 @@ def on_cluster(n_workers, meshes, diagrams, reference):
         client.wait_for_workers(n_workers)
         client.run(_warm)
         result = {"start_and_warm_s": time.perf_counter() - start}
-        with parallel_backend("dask", resources={"slot": 1}):
+        with parallel_backend("dask", **({"resources": slot} if slot else {})):
             eigen, parts = stages(n_jobs=-1)
             with get_task_stream(client) as stream:
                 start, cpu = time.perf_counter(), time.process_time()

@@ -16,15 +16,17 @@ __all__ = ["map_samples", "parallel", "sample_blocks", "track"]
 _BLOCK = 2048
 
 
-def parallel(n_jobs, prefer=None) -> Parallel:
+def parallel(n_jobs, prefer=None, batch_size="auto") -> Parallel:
     """A joblib ``Parallel`` returning results in order as they finish, where the backend
     can (loky, threading, dask with joblib >= 1.4); others (multiprocessing) return
     them all at once. ``prefer="threads"`` is joblib's soft hint for work that releases
-    the GIL (a ``parallel_backend`` context still decides)."""
+    the GIL (a ``parallel_backend`` context still decides); ``batch_size=1`` sends each
+    task alone, for tasks already cut to a few per worker (joblib's automatic batching,
+    learned on the fast tasks of earlier calls, would put several on one worker)."""
     try:
-        return Parallel(n_jobs=n_jobs, return_as="generator", prefer=prefer)
+        return Parallel(n_jobs=n_jobs, return_as="generator", prefer=prefer, batch_size=batch_size)
     except ValueError:  # "Backend ... does not support return_as=generator"
-        return Parallel(n_jobs=n_jobs, prefer=prefer)
+        return Parallel(n_jobs=n_jobs, prefer=prefer, batch_size=batch_size)
 
 
 def track(items: Iterable, *, total: int, desc: str, verbose: int) -> Iterator:

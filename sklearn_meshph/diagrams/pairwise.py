@@ -289,7 +289,7 @@ def pair_matrix(
     n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
     bounds = _row_blocks(n, pairs_per_row, n_tasks)
     matrix = np.zeros((n, m), dtype=dtype) if out is None else out
-    tasks = parallel(n_jobs)(
+    tasks = parallel(n_jobs, batch_size=1)(
         delayed(_block)(function, left, right, a, b, m, symmetric, first)
         for a, b in zip(bounds[:-1], bounds[1:], strict=True)
     )
