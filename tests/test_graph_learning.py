@@ -244,3 +244,19 @@ def test_graph_features_without_patterns():
     assert features.transform(fields).shape == (1, features.n_features_out_)
     with pytest.raises(ValueError, match="wl_buckets"):
         GraphFeatures(wl_buckets=1).fit(fields)
+
+
+@pytest.mark.parametrize(
+    ("params", "name"),
+    [
+        ({"wl_buckets": 2**31, "wl_iterations": 1}, "wl_buckets"),
+        ({"wl_iterations": 10**9}, "wl_iterations"),
+        ({"n_bins": 2**40}, "n_bins"),
+        ({"max_hops": 10**12}, "max_hops"),
+        ({"n_pair_bins": 2**33}, "n_pair_bins"),
+    ],
+)
+def test_graph_features_refuse_bin_counts_that_would_exhaust_memory(params, name):
+    fields = eigen().fit_transform([cycle(5)])
+    with pytest.raises(ValueError, match=f"'{name}' parameter of GraphFeatures"):
+        GraphFeatures(**params).fit(fields)

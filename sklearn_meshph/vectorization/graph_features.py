@@ -196,7 +196,8 @@ class GraphFeatures(SampleTransformer):
     Parameters
     ----------
     n_bins : int, default=20
-        Bins of the spectrum's histogram.
+        Bins of the spectrum's histogram (at most 10,000, as ``max_hops`` and
+        ``n_pair_bins``).
     pairs : bool, default=True
         Whether to add the histograms over the pairs of nodes.
     max_hops : int, default=20
@@ -205,9 +206,11 @@ class GraphFeatures(SampleTransformer):
         Bins of the harmonic distance's histogram.
     wl_iterations : int, default=0
         Weisfeiler-Lehman iterations after the degree histogram; 0 leaves out the
-        patterns and the degree histogram (:func:`make_graph_classifier` uses 3).
+        patterns and the degree histogram (:func:`make_graph_classifier` uses 3); at
+        most 100.
     wl_buckets : int, default=64
-        Bins of the degree histogram and of each iteration's hashed pattern counts.
+        Bins of the degree histogram and of each iteration's hashed pattern counts (at
+        most 4,096).
 
     Attributes
     ----------
@@ -242,12 +245,14 @@ class GraphFeatures(SampleTransformer):
 
     _sample_kind = "scalar fields"
     _parameter_constraints: dict = {
-        "n_bins": [Interval(Integral, 1, None, closed="left")],
+        # Upper bounds keep a row of features a few megabytes at most: a bin count of
+        # 2**31 would otherwise ask for gigabytes per graph.
+        "n_bins": [Interval(Integral, 1, 10_000, closed="both")],
         "pairs": ["boolean"],
-        "max_hops": [Interval(Integral, 1, None, closed="left")],
-        "n_pair_bins": [Interval(Integral, 2, None, closed="left")],
-        "wl_iterations": [Interval(Integral, 0, None, closed="left")],
-        "wl_buckets": [Interval(Integral, 2, None, closed="left")],
+        "max_hops": [Interval(Integral, 1, 10_000, closed="both")],
+        "n_pair_bins": [Interval(Integral, 2, 10_000, closed="both")],
+        "wl_iterations": [Interval(Integral, 0, 100, closed="both")],
+        "wl_buckets": [Interval(Integral, 2, 4096, closed="both")],
     }
 
     def __init__(
