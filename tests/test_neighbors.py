@@ -156,40 +156,31 @@ def test_queries_prune_most_exact_distances_in_a_clustered_collection():
     assert fraction.mean() < 0.4  # every sample would be computed without the bounds
 
 
-def test_the_default_pipeline_on_meshes_matches_its_brute_force():
+@pytest.mark.parametrize(
+    ("preset", "seed", "rtol", "rows"),
+    [
+        (None, 0, 0.0, {"ord1", "ext0", "ext1", "dna"}),  # the default, bit for bit
+        # The "features" preset ends in a pipeline (features, then their distance): the
+        # index looks through it; Euclidean distances of a block round differently.
+        ("features", 1, 1e-9, {"distance"}),
+    ],
+)
+def test_a_preset_on_meshes_matches_its_brute_force(preset, seed, rtol, rows):
     meshes, _ = make_shapes(
         n_per_class=2,
         classes=("blob", "snake", "star"),
         resolution=(10, 14),
-        random_state=0,
+        random_state=seed,
         return_X_y=True,
     )
-    index = ShapeNeighbors(n_neighbors=2, scale_samples=None).fit(meshes[:5])
-    brute = make_mesh_distance().fit(meshes[:5])
+    distance = None if preset is None else make_mesh_distance(preset)
+    index = ShapeNeighbors(distance, n_neighbors=2, scale_samples=None).fit(meshes[:5])
+    brute = make_mesh_distance(preset or "default").fit(meshes[:5])
     distances, indices = index.kneighbors(meshes[5:])
     expected_distances, expected_indices = _brute_force(brute.transform(meshes[5:]), 2)
     np.testing.assert_array_equal(indices, expected_indices)
-    np.testing.assert_array_equal(distances, expected_distances)
-    assert set(index.rows_) == {"ord1", "ext0", "ext1", "dna"}
-
-
-def test_the_features_preset_nested_pipeline_matches_its_brute_force():
-    """The ``"features"`` preset ends in a pipeline (features, then their distance): the
-    index looks through it, and the learned grids and scales are those of ``fit``."""
-    meshes, _ = make_shapes(
-        n_per_class=2,
-        classes=("blob", "snake", "star"),
-        resolution=(10, 14),
-        random_state=1,
-        return_X_y=True,
-    )
-    preset = make_mesh_distance("features")
-    index = ShapeNeighbors(preset, n_neighbors=2, scale_samples=None).fit(meshes[:5])
-    brute = clone(preset).fit(meshes[:5])
-    distances, indices = index.kneighbors(meshes[5:])
-    expected_distances, expected_indices = _brute_force(brute.transform(meshes[5:]), 2)
-    np.testing.assert_array_equal(indices, expected_indices)
-    np.testing.assert_allclose(distances, expected_distances, rtol=1e-9)  # Euclidean rounding
+    np.testing.assert_allclose(distances, expected_distances, rtol=rtol, atol=0)
+    assert set(index.rows_) == rows
 
 
 def test_scales_are_learned_on_scale_samples_drawn_from_the_fitted_samples():
