@@ -170,6 +170,8 @@ def test_a_graph_is_returned_as_is_and_checked_when_made():
     [
         ((0, np.empty((0, 2), int), []), ValueError, "at least one node"),
         ((True, np.empty((0, 2), int), []), TypeError, "n_nodes must be a positive int"),
+        ((10**11, [[0, 1]], [1.0]), ValueError, "more than the 2147483647 nodes"),
+        ((2**31, np.empty((0, 2), int), []), ValueError, "more than the 2147483647 nodes"),
         ((3, [[1, 0]], [1.0]), ValueError, r"\(i, j\) with i < j"),
         ((3, [[1, 1]], [1.0]), ValueError, r"\(i, j\) with i < j"),
         ((3, [[1, 2], [0, 1]], [1.0, 1.0]), ValueError, "sorted rows without repeats"),
@@ -226,6 +228,8 @@ def _one_sided():
         (lambda: (-2, []), ValueError, "at least one node"),
         (lambda: (2.0, [[0, 1]]), TypeError, "n_nodes must be a positive int, got 2.0"),
         (lambda: (True, [[0, 1]]), TypeError, "n_nodes must be a positive int"),
+        (lambda: (10**11, [[0, 1]]), ValueError, "n_nodes=100000000000 is more than the"),
+        (lambda: sp.csr_array((2**31, 2**31)), ValueError, "n_nodes=2147483648 is more than"),
         (lambda: (3, [[0, 3]]), ValueError, r"edge 0 \(0, 3\) has a node outside 0..2"),
         (lambda: (3, [[0, 1], [-1, 2]]), ValueError, r"edge 1 \(-1, 2\) has a node outside"),
         (lambda: (3, np.array([[0.0, 1.0]])), TypeError, "edges must be integers"),

@@ -37,6 +37,10 @@ __all__ = ["Graph", "check_graph", "is_graph"]
 # Relative difference tolerated between a[i, j] and a[j, i] of a symmetric adjacency.
 _SYMMETRY_RTOL = 1e-10
 
+# Most nodes a graph may have: scipy's sparse graph routines index nodes with 32-bit
+# integers, and an edge (i, j) is keyed by i * n_nodes + j, which must fit in 64 bits.
+MAX_NODES = 2**31 - 1
+
 
 def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.array(array, copy=True)
@@ -49,6 +53,10 @@ def _n_nodes(n_nodes, place: str) -> int:
         raise TypeError(f"{place}: n_nodes must be a positive int, got {n_nodes!r}")
     if n_nodes < 1:
         raise ValueError(f"{place}: a graph needs at least one node, got n_nodes={n_nodes}")
+    if n_nodes > MAX_NODES:
+        raise ValueError(
+            f"{place}: n_nodes={n_nodes} is more than the {MAX_NODES} nodes a graph may have"
+        )
     return int(n_nodes)
 
 
