@@ -1,7 +1,8 @@
 """Parallel work and its progress: joblib tasks returned as they finish, the one
 scheduler of per-sample work (:func:`map_samples`, its blocks from
-:func:`sample_blocks`), and tqdm bars when tqdm is installed (the ``progress``
-extra), silence otherwise and whenever ``verbose`` is 0."""
+:func:`sample_blocks`), what every task of a call reads sent once to each worker of a
+dask cluster (:func:`broadcast`), and tqdm bars when tqdm is installed (the
+``progress`` extra), silence otherwise and whenever ``verbose`` is 0."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ from collections.abc import Iterable, Iterator
 
 import numpy as np
 from joblib import Parallel, delayed, effective_n_jobs
+from joblib.parallel import get_active_backend
 
-__all__ = ["map_samples", "parallel", "sample_blocks", "track"]
+__all__ = ["broadcast", "map_samples", "parallel", "sample_blocks", "track"]
 
 # Samples per block at most: bounds the memory of the results in flight.
 _BLOCK = 2048
@@ -27,6 +29,18 @@ def parallel(n_jobs, prefer=None, batch_size="auto") -> Parallel:
         return Parallel(n_jobs=n_jobs, return_as="generator", prefer=prefer, batch_size=batch_size)
     except ValueError:  # "Backend ... does not support return_as=generator"
         return Parallel(n_jobs=n_jobs, prefer=prefer, batch_size=batch_size)
+
+
+def broadcast(values: list) -> list:
+    """``values`` as the tasks of the next parallel call should receive them: under
+    joblib's dask backend, futures of copies scattered to every worker of the cluster
+    at once (so that any task runs on any worker without waiting for a transfer, and
+    nothing travels with the tasks); under any other backend, the values themselves."""
+    backend, _ = get_active_backend()
+    client = getattr(backend, "client", None)
+    if not values or client is None or type(backend).__name__ != "DaskDistributedBackend":
+        return list(values)
+    return client.scatter(list(values), broadcast=True, hash=False)
 
 
 def track(items: Iterable, *, total: int, desc: str, verbose: int) -> Iterator:

@@ -346,13 +346,13 @@ def toy_classes(n, seed):
 
 def count_distance_matrices(monkeypatch):
     calls = []
-    original = pairwise.distance_matrix
+    original = pairwise.distance_matrices
 
-    def counting(*args, **kwargs):
-        calls.append(len(args[0]))
-        return original(*args, **kwargs)
+    def counting(sides, *args, **kwargs):
+        calls.extend(len(left) for left, _ in sides)  # one per diagram position
+        return original(sides, *args, **kwargs)
 
-    monkeypatch.setattr(pairwise, "distance_matrix", counting)
+    monkeypatch.setattr(pairwise, "distance_matrices", counting)
     return calls
 
 

@@ -5,6 +5,7 @@ the base of the transformers that return a matrix to their fitted samples."""
 from __future__ import annotations
 
 from functools import partial
+from math import comb
 from numbers import Integral, Real
 
 import numpy as np
@@ -12,7 +13,7 @@ from joblib import delayed, effective_n_jobs
 from sklearn.base import ClassNamePrefixFeaturesOutMixin
 
 from .._param_validation import Interval, Options, validate_params
-from .._progress import parallel, track
+from .._progress import broadcast, parallel, track
 from ._assignment import precedes
 from ._batch import SLICED, pack, pack_sliced, pair_distances
 from .distances import METRICS, kernel_metric
@@ -21,15 +22,19 @@ from .validation import Packed, pack_samples
 
 __all__ = [
     "SLICED",
+    "PairRequest",
     "PairwiseTransformer",
     "as_packed",
+    "distance_matrices",
     "distance_matrix",
     "distance_stack",
     "pack_for_metric",
     "pair_distances",
+    "pair_matrices",
     "pair_matrix",
     "pairwise_diagram_distances",
     "precedes",
+    "sample_sizes",
 ]
 
 
@@ -40,22 +45,140 @@ def as_packed(samples) -> Packed:
 
 # Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
 _MAX_TASK_PAIRS = 1_000_000
+# Blocks per worker in one parallel call: the costliest go first and the last ones are
+# small, so every worker stays busy to the end of the call.
+_BLOCKS_PER_WORKER = 16
+# The estimated cost of a pair of diagrams of a and b points is
+# ``_PAIR_COST + (a + b) ** degree``: degree 2 for the optimal matchings (bottleneck,
+# Wasserstein), 1 for the sliced Wasserstein distance. Only the blocks' boundaries and
+# order depend on it, never a value.
+_PAIR_COST = 80.0
 
 
-def _row_blocks(n_rows, pairs_per_row, n_tasks):
-    """Boundaries of consecutive row blocks holding about equal numbers of pairs."""
-    cumulative = np.concatenate([[0], np.cumsum(pairs_per_row)])
+def _row_blocks(n_rows, weights, n_tasks):
+    """Boundaries of consecutive row blocks holding about equal sums of ``weights``
+    (one per row: its pairs, or their estimated cost)."""
+    cumulative = np.concatenate([[0], np.cumsum(weights)])
     targets = np.linspace(0, cumulative[-1], n_tasks + 1)
     bounds = np.unique(np.searchsorted(cumulative, targets, side="left"))
     bounds[0], bounds[-1] = 0, n_rows
     return np.unique(bounds)
 
 
+def sample_sizes(packed: Packed) -> np.ndarray:
+    """The points of each diagram of each sample, ``(n_samples, n_diagrams)``: what
+    :class:`PairRequest` estimates the cost of a pair from."""
+    return np.diff(packed.offsets).reshape(len(packed), packed.n_diagrams)
+
+
+class PairRequest:
+    """One ``(n, m)`` matrix of ``function(left, right, rows, cols)`` (the values of the
+    pairs ``(rows[k], cols[k])``) for :func:`pair_matrices`.
+
+    ``left`` and ``right`` are whatever ``function`` reads (packed samples); with
+    ``right=None`` the matrix is symmetric (``m == n``), each unordered pair computed
+    once and mirrored, and its diagonal is ``diagonal``, or computed if it is None.
+    ``out`` receives the matrix (a new ``dtype`` array if None). ``sizes`` are the
+    points of each diagram of the left and right samples (:func:`sample_sizes`; right
+    None when symmetric), from which the cost of a pair is estimated as
+    ``_PAIR_COST + (a + b) ** degree`` summed over the diagram positions; without them
+    every pair costs the same.
+    """
+
+    def __init__(
+        self,
+        function,
+        left,
+        right,
+        n,
+        m,
+        *,
+        dtype=np.float64,
+        out=None,
+        diagonal=0.0,
+        sizes=None,
+        degree=2,
+    ):
+        self.function, self.left, self.right = function, left, right
+        self.n, self.m = n, m
+        self.symmetric = right is None
+        self.first = 0 if self.symmetric and diagonal is None else 1
+        self.diagonal = diagonal
+        self.matrix = np.zeros((n, m), dtype=dtype) if out is None else out
+        if sizes is None:
+            sizes = (np.zeros((n, 1)), None if self.symmetric else np.zeros((m, 1)))
+        self.row_costs = _row_costs(*sizes, self.first, degree)
+        if self.symmetric:
+            self.row_pairs = np.arange(n - self.first, -self.first, -1)
+        else:
+            self.row_pairs = np.full(n, m)
+
+    def blocks(self, target_cost):
+        """``(start, stop, estimated cost)`` of consecutive row blocks of about
+        ``target_cost`` each (one block for all rows if ``target_cost`` is None), none
+        of more than ``_MAX_TASK_PAIRS`` pairs."""
+        total = float(self.row_costs.sum())
+        n_blocks = 1 if target_cost is None or total == 0 else -(-total // target_cost)
+        n_blocks = max(int(n_blocks), -(-int(self.row_pairs.sum()) // _MAX_TASK_PAIRS))
+        bounds = _row_blocks(self.n, self.row_costs, min(self.n, n_blocks))
+        out = []
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+            # Rows of costly samples may gather more pairs than a task should hold.
+            pieces = -(-int(self.row_pairs[a:b].sum()) // _MAX_TASK_PAIRS)
+            cuts = a + _row_blocks(b - a, self.row_pairs[a:b], max(1, pieces))
+            out += [
+                (c, d, float(self.row_costs[c:d].sum()))
+                for c, d in zip(cuts[:-1], cuts[1:], strict=True)
+            ]
+        return out
+
+    def write(self, a, b, values):
+        """Store the values of the block of rows ``a:b``."""
+        matrix, n, m = self.matrix, self.n, self.m
+        if self.symmetric:
+            first, position = self.first, 0
+            for i in range(a, b):
+                row = values[position : position + n - i - first]
+                matrix[i, i + first :] = row
+                matrix[i + first :, i] = row
+                position += n - i - first
+        else:
+            matrix[a:b] = values.reshape(b - a, m)
+
+    def finish(self):
+        if self.symmetric and self.diagonal is not None:
+            self.matrix[np.arange(self.n), np.arange(self.n)] = self.diagonal
+        return self.matrix
+
+
+def _row_costs(left_sizes, right_sizes, first, degree):
+    """The estimated cost of the pairs of each row: ``sum_j sum_p _PAIR_COST + (a_ip +
+    b_jp) ** degree`` over the row's columns ``j`` (when symmetric, from ``i + first``
+    on) and the diagram positions ``p``."""
+    symmetric = right_sizes is None
+    a = np.asarray(left_sizes, dtype=float)
+    b = a if symmetric else np.asarray(right_sizes, dtype=float)
+    n = len(a)
+    total = np.zeros(a.shape)
+    for k in range(degree + 1):
+        power = b**k
+        if symmetric:  # sums over the columns from i + first on
+            suffix = np.concatenate([np.cumsum(power[::-1], axis=0)[::-1], np.zeros_like(a[:1])])
+            sums = suffix[np.minimum(np.arange(n) + first, n)]
+        else:
+            sums = power.sum(axis=0)
+        total = total + comb(degree, k) * a ** (degree - k) * sums
+        if k == 0:
+            total = total + _PAIR_COST * sums
+    return total.sum(axis=1)
+
+
 class _Shared:
-    """What every task of one call reads (packed samples: a tuple of arrays), in an
-    object that joblib's dask backend sends to the cluster once per call instead of with
-    every task: it scatters the arguments that are weakly referable and larger than a
-    kilobyte by ``sizeof``, which a tuple is not."""
+    """What the blocks of one matrix read (packed samples: a tuple of arrays), in one
+    object: :func:`broadcast` sends it to every worker of a dask cluster at once (a
+    tuple would be scattered item by item), and should that not happen, joblib's dask
+    backend still scatters it once per call (it scatters the arguments that are weakly
+    referable and larger than a kilobyte by ``sizeof``, which a tuple is not)."""
 
     def __init__(self, value):
         self.value = value
@@ -65,14 +188,16 @@ class _Shared:
         return object.__sizeof__(self) + self.nbytes
 
 
-def _block(function, left, right, start, stop, n_cols, symmetric, first):
-    """``function`` on the pairs of rows ``start:stop``: with every column, or when
-    symmetric with the columns from ``i + first`` on (``first`` 0: with the diagonal)."""
-    left, right = left.value, right.value
-    if symmetric:
+def _block(function, left, right, start, stop, n_cols, first):
+    """``function`` on the pairs of rows ``start:stop``: with every column of ``right``,
+    or when ``right`` is None (symmetric) with the columns from ``i + first`` on
+    (``first`` 0: with the diagonal)."""
+    if right is None:
+        left = right = left.value
         rows = np.concatenate([np.full(n_cols - i - first, i) for i in range(start, stop)])
         cols = np.concatenate([np.arange(i + first, n_cols) for i in range(start, stop)])
     else:
+        left, right = left.value, right.value
         rows, cols = np.divmod(np.arange(start * n_cols, stop * n_cols), n_cols)
     return function(left, right, rows, cols)
 
@@ -146,9 +271,11 @@ def pairwise_diagram_distances(
 
     Notes
     -----
-    Rows are split into blocks of about equal work, a few per worker and at most a
-    million pairs each, every block one compiled loop; the pair indices are made inside
-    the workers, so memory stays bounded whatever the number of samples.
+    Rows are split into blocks of about equal estimated work (from the diagrams'
+    sizes), several per worker and at most a million pairs each, every block one
+    compiled loop, the costliest first (with ``per_diagram``, the blocks of every
+    position in one parallel call); the pair indices are made inside the workers, so
+    memory stays bounded whatever the number of samples.
 
     Examples
     --------
@@ -194,31 +321,51 @@ def distance_matrix(
 ):
     """:func:`pairwise_diagram_distances` on validated samples (:class:`Packed`, or
     lists of tuples of diagrams)."""
-    code, order = kernel_metric(metric, order, internal_p)
-    left = as_packed(left)
-    right = None if right is None else as_packed(right)
-    n_parts = left.n_diagrams
-    n, m = len(left), len(left if right is None else right)
-    packed_left = pack_for_metric(left, code, n_directions)
-    packed_right = None if right is None else pack_for_metric(right, code, n_directions)
-    function = partial(
-        pair_distances,
-        n_parts=n_parts,
-        metric=code,
-        order=order,
-        internal_p=float(internal_p),
-    )
-    return pair_matrix(
-        function,
-        packed_left,
-        packed_right,
-        n,
-        m,
-        n_jobs=n_jobs,
-        dtype=dtype,
-        out=out,
+    return distance_matrices(
+        [(left, right)],
+        metric,
+        order,
+        internal_p,
+        n_jobs,
+        dtype,
+        None if out is None else [out],
         verbose=verbose,
-    )
+        n_directions=n_directions,
+    )[0]
+
+
+def distance_matrices(
+    sides, metric, order, internal_p, n_jobs, dtype, out=None, verbose=0, n_directions=10
+) -> list:
+    """The distance matrix of each ``(left, right)`` of ``sides`` (validated samples;
+    ``right=None``: the symmetric matrix of ``left``), all in one parallel call
+    (:func:`pair_matrices`); ``out``: None or one array per matrix."""
+    code, order = kernel_metric(metric, order, internal_p)
+    requests = []
+    for k, (left, right) in enumerate(sides):
+        left = as_packed(left)
+        right = None if right is None else as_packed(right)
+        function = partial(
+            pair_distances,
+            n_parts=left.n_diagrams,
+            metric=code,
+            order=order,
+            internal_p=float(internal_p),
+        )
+        requests.append(
+            PairRequest(
+                function,
+                pack_for_metric(left, code, n_directions),
+                None if right is None else pack_for_metric(right, code, n_directions),
+                len(left),
+                len(left if right is None else right),
+                dtype=dtype,
+                out=None if out is None else out[k],
+                sizes=(sample_sizes(left), None if right is None else sample_sizes(right)),
+                degree=1 if code == SLICED else 2,
+            )
+        )
+    return pair_matrices(requests, n_jobs=n_jobs, verbose=verbose)
 
 
 def distance_stack(
@@ -236,24 +383,24 @@ def distance_stack(
     """The distance matrix of each diagram position of validated samples
     (:class:`Packed`, or lists of tuples of diagrams), stacked: ``out[i, j, k]`` is the
     distance between diagram ``k`` of ``left[i]`` and of ``right[j]`` (``right=None``:
-    ``left`` again, each unordered pair computed once)."""
+    ``left`` again, each unordered pair computed once); every position in one parallel
+    call."""
     left = as_packed(left)
     right = None if right is None else as_packed(right)
     n, m = len(left), len(left if right is None else right)
     stack = np.empty((n, m, left.n_diagrams), dtype=dtype) if out is None else out
-    for k in range(left.n_diagrams):
-        distance_matrix(
-            left.only(k),
-            None if right is None else right.only(k),
-            metric,
-            order,
-            internal_p,
-            n_jobs,
-            dtype,
-            stack[:, :, k],
-            verbose=verbose,
-            n_directions=n_directions,
-        )
+    positions = range(left.n_diagrams)
+    distance_matrices(
+        [(left.only(k), None if right is None else right.only(k)) for k in positions],
+        metric,
+        order,
+        internal_p,
+        n_jobs,
+        dtype,
+        [stack[:, :, k] for k in positions],
+        verbose=verbose,
+        n_directions=n_directions,
+    )
     return stack
 
 
@@ -271,42 +418,46 @@ def pair_matrix(
     diagonal=0.0,
     desc="distances",
 ):
-    """The ``(n, m)`` matrix of ``function(left, right, rows, cols)`` (the values of the
-    pairs ``(rows[k], cols[k])``), over blocks of rows in parallel.
+    """The ``(n, m)`` matrix of ``function(left, right, rows, cols)``: one
+    :class:`PairRequest` (see there) given to :func:`pair_matrices`."""
+    request = PairRequest(function, left, right, n, m, dtype=dtype, out=out, diagonal=diagonal)
+    return pair_matrices([request], n_jobs=n_jobs, verbose=verbose, desc=desc)[0]
 
-    ``left`` and ``right`` are whatever ``function`` reads (packed samples); with
-    ``right=None`` the matrix is symmetric (``m == n``), each unordered pair computed
-    once and mirrored, and its diagonal is ``diagonal``, or computed if it is None.
-    Blocks hold about equal numbers of pairs, a few per worker and at most a million
-    each; results do not depend on the blocks, so neither on ``n_jobs`` nor the backend.
+
+def pair_matrices(requests, *, n_jobs=None, verbose=0, desc="distances") -> list:
+    """The matrices of several :class:`PairRequest`, over blocks of rows, all in one
+    parallel call.
+
+    Every matrix is cut into consecutive row blocks of about equal estimated cost,
+    ``_BLOCKS_PER_WORKER`` per worker for the whole call (a cheap matrix is one block),
+    and at most a million pairs each; the blocks go costliest first, so the call ends
+    on small ones and no worker waits long for another's block. The samples the blocks
+    read are sent to every worker of a dask cluster once per call. With one worker
+    (``n_jobs=1``, under any backend) the blocks run here, one after the other. Each
+    value is computed alone, so the matrices do not depend on the blocks: neither on
+    ``n_jobs`` nor on the backend.
     """
-    symmetric = right is None
-    left = _Shared(left)
-    right = left if symmetric else _Shared(right)
-    first = 0 if symmetric and diagonal is None else 1
-    pairs_per_row = np.arange(n - first, -first, -1) if symmetric else np.full(n, m)
-    total = int(pairs_per_row.sum())
-    n_tasks = max(1, min(n, max(4 * effective_n_jobs(n_jobs), -(-total // _MAX_TASK_PAIRS))))
-    bounds = _row_blocks(n, pairs_per_row, n_tasks)
-    matrix = np.zeros((n, m), dtype=dtype) if out is None else out
-    tasks = parallel(n_jobs, batch_size=1)(
-        delayed(_block)(function, left, right, a, b, m, symmetric, first)
-        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
-    )
-    blocks = track(tasks, total=len(bounds) - 1, desc=desc, verbose=verbose)
-    for a, b, values in zip(bounds[:-1], bounds[1:], blocks, strict=True):
-        if symmetric:
-            position = 0
-            for i in range(a, b):
-                row = values[position : position + n - i - first]
-                matrix[i, i + first :] = row
-                matrix[i + first :, i] = row
-                position += n - i - first
-        else:
-            matrix[a:b] = values.reshape(b - a, m)
-    if symmetric and diagonal is not None:
-        matrix[np.arange(n), np.arange(n)] = diagonal
-    return matrix
+    workers = effective_n_jobs(n_jobs)
+    total = sum(float(r.row_costs.sum()) for r in requests)
+    target = None if workers == 1 else total / (_BLOCKS_PER_WORKER * workers)
+    tasks = [(r, a, b, cost) for r in requests for a, b, cost in r.blocks(target)]
+    tasks.sort(key=lambda task: -task[3])  # stable: ties keep the requests' order
+    sides = {}
+    for r in requests:
+        sides[id(r)] = (_Shared(r.left), None if r.symmetric else _Shared(r.right))
+    local = workers == 1 or len(tasks) <= 1
+    if not local:  # sent once to every worker of a dask cluster, themselves elsewhere
+        held = [side for pair in sides.values() for side in pair if side is not None]
+        sent = dict(zip(map(id, held), broadcast(held), strict=True))
+        sides = {k: tuple(sent.get(id(side)) for side in pair) for k, pair in sides.items()}
+    run = _block if local else delayed(_block)
+    calls = (run(r.function, *sides[id(r)], a, b, r.m, r.first) for r, a, b, _ in tasks)
+    blocks = calls if local else parallel(n_jobs, batch_size=1)(calls)
+    for (r, a, b, _), values in zip(
+        tasks, track(blocks, total=len(tasks), desc=desc, verbose=verbose), strict=True
+    ):
+        r.write(a, b, values)
+    return [r.finish() for r in requests]
 
 
 class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, DiagramTransformer):

@@ -11,7 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer, as_sample_list, median_scale
 from .._param_validation import Interval, Options
 from .distances import METRICS, kernel_metric
-from .pairwise import PairwiseTransformer, distance_matrix
+from .pairwise import PairwiseTransformer, distance_matrices, distance_matrix
 from .validation import check_samples
 
 __all__ = ["DiagramDistance"]
@@ -179,16 +179,12 @@ class DiagramDistance(PairwiseTransformer):
         )
 
     def _per_position(self, left, right):
-        """The float64 distance matrix of each position on its own."""
-        kwargs = self._kwargs(dtype="float64")
-        return [
-            distance_matrix(
-                [s[k : k + 1] for s in left],
-                None if right is None else [s[k : k + 1] for s in right],
-                **kwargs,
-            )
+        """The float64 distance matrix of each position on its own, all in one call."""
+        sides = [
+            ([s[k : k + 1] for s in left], None if right is None else [s[k : k + 1] for s in right])
             for k in range(self.n_diagrams_)
         ]
+        return distance_matrices(sides, **self._kwargs(dtype="float64"))
 
     def _combine(self, parts):
         """Per-position matrices divided by their scales, combined as the metric combines
