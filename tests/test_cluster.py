@@ -1,16 +1,28 @@
 """The default pipeline on a dask.distributed cluster, through joblib's dask backend:
 every stage runs on the workers and the output is bitwise the local run's on one core;
 the eigen cache in a folder the workers share is written by them and read back; the
-diagrams every block of pairs reads go to the cluster once per call.
+diagrams every block of pairs reads go to every worker once per call; the blocks of all
+the diagram positions of a distance go in one parallel call, costliest first; and
+``n_jobs=1`` runs everything in the calling process.
 
-One ``LocalCluster`` of 2 worker processes (one thread each) serves the module.
+A ``LocalCluster`` of 2 worker processes (one thread each) serves the module, and one of
+a single worker process with two threads (joblib then sends it tasks) the tests that
+compare both.
 """
+
+from contextlib import nullcontext
 
 import numpy as np
 import pytest
 from joblib import parallel_backend
 
-from sklearn_meshph import DiagramDistance, make_mesh_distance, make_shapes
+import sklearn_meshph.diagrams.pairwise as pairwise
+from sklearn_meshph import (
+    DiagramDistance,
+    PerDiagramDistance,
+    make_mesh_distance,
+    make_shapes,
+)
 
 distributed = pytest.importorskip("distributed")
 
@@ -22,6 +34,17 @@ def client():
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster,
         distributed.Client(cluster) as client,
+    ):
+        yield client
+
+
+@pytest.fixture(scope="module")
+def one_worker():
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster, set_as_default=False) as client,
     ):
         yield client
 
@@ -80,3 +103,117 @@ def test_diagrams_go_to_the_cluster_once_per_call_not_with_each_task(client, mon
     # One symmetric matrix: its samples scattered once, read by every task.
     assert len(scattered) == 1
     assert len(stream.data) > 1
+
+
+def uneven_samples(n=40, seed=0):
+    """Samples of three diagrams: the first of 1 point, the second of 2 to 40 points
+    (its pairs cost most, unevenly), the third empty but for an essential point."""
+    rng = np.random.default_rng(seed)
+
+    def diagram(k):
+        births = rng.random(k)
+        return np.column_stack([births, births + rng.random(k)])
+
+    essential = [np.array([[rng.random(), np.inf]]) for _ in range(n)]
+    return [(diagram(1), diagram(int(rng.integers(2, 41))), essential[i]) for i in range(n)]
+
+
+def combined_and_stacks(n_jobs, backend=None, **backend_params):
+    """A median-normalized Wasserstein distance (its fit_transform and a transform) and
+    a stack of bottleneck distances, under ``backend`` (None: none)."""
+    X, Y = uneven_samples(), uneven_samples(7, seed=1)
+    distance = DiagramDistance(metric="wasserstein", order=1.0, normalization="median")
+    stack = PerDiagramDistance(metric="bottleneck")
+    context = parallel_backend(backend, **backend_params) if backend else nullcontext()
+    with context:
+        distance.set_params(n_jobs=n_jobs)
+        stack.set_params(n_jobs=n_jobs)
+        return (
+            distance.fit_transform(X),
+            distance.transform(Y),
+            stack.fit_transform(X),
+            stack.transform(Y),
+        )
+
+
+@pytest.fixture(scope="module")
+def local_blocks():
+    return combined_and_stacks(n_jobs=1)
+
+
+@pytest.mark.parametrize("cluster", ["one_worker", "client"])
+def test_distance_blocks_on_1_and_2_workers_are_bitwise_the_local_run(
+    cluster, request, local_blocks
+):
+    client = request.getfixturevalue(cluster)
+    with distributed.get_task_stream(client) as stream:
+        results = combined_and_stacks(-1, "dask", client=client)
+    for result, expected in zip(results, local_blocks, strict=True):
+        np.testing.assert_array_equal(result, expected)
+    assert len(stream.data) > 4  # the blocks ran on the cluster
+
+
+@pytest.mark.parametrize("backend", ["loky", "threading"])
+def test_distance_blocks_are_bitwise_the_local_run_under_local_backends(backend, local_blocks):
+    for result, expected in zip(combined_and_stacks(2, backend), local_blocks, strict=True):
+        np.testing.assert_array_equal(result, expected)
+
+
+def test_n_jobs_1_under_the_dask_backend_runs_nothing_on_the_cluster(client, meshes, local):
+    with parallel_backend("dask"), distributed.get_task_stream(client) as stream:
+        matrix = make_mesh_distance(n_jobs=1).fit_transform(meshes)
+        blocks = combined_and_stacks(n_jobs=1)
+    np.testing.assert_array_equal(matrix, local)
+    assert stream.data == []
+    assert blocks[0].shape == (40, 40)
+
+
+def test_the_samples_go_to_every_worker_at_once(client, monkeypatch):
+    kinds = []
+    scatter = client.scatter
+
+    def recording_scatter(data, *args, **kwargs):
+        kinds.append(kwargs.get("broadcast", False))
+        return scatter(data, *args, **kwargs)
+
+    monkeypatch.setattr(client, "scatter", recording_scatter)
+    with parallel_backend("dask"):
+        DiagramDistance(metric="wasserstein", n_jobs=-1).fit_transform(uneven_samples())
+    assert kinds == [True]
+
+
+def test_all_positions_go_in_one_parallel_call_costliest_block_first(monkeypatch):
+    """DiagramDistance(normalization="median") and a stack compute a matrix per
+    diagram position: all their blocks are dispatched in one call, the blocks of the
+    costly position (many points) before those of the cheap ones, and the costly
+    position in more blocks than the cheap ones."""
+    dispatched = []  # per parallel call, the (position, start) of its blocks in order
+
+    def recording_parallel(n_jobs, batch_size="auto"):
+        def run(calls):
+            dispatched.append([])
+            for function, args, kwargs in calls:
+                left = args[1].value
+                n_points = len(left[0])  # the position's points: tells it apart
+                dispatched[-1].append((n_points, args[3]))
+                yield function(*args, **kwargs)
+
+        return run
+
+    monkeypatch.setattr(pairwise, "parallel", recording_parallel)
+    X = uneven_samples()
+    sizes = [sum(len(s[k]) for s in X) for k in range(3)]
+    with parallel_backend("threading"):
+        for estimator in (
+            DiagramDistance(metric="wasserstein", normalization="median"),
+            PerDiagramDistance(metric="bottleneck"),
+        ):
+            dispatched.clear()
+            expected = estimator.set_params(n_jobs=1).fit_transform(X)
+            assert dispatched == []  # n_jobs=1: no parallel call
+            np.testing.assert_array_equal(estimator.set_params(n_jobs=2).fit_transform(X), expected)
+            assert len(dispatched) == 1
+            order = [n_points for n_points, _ in dispatched[0]]
+            costly = order.count(sizes[1])
+            assert order[:costly] == [sizes[1]] * costly
+            assert costly > 2 * max(order.count(sizes[0]), 1)
