@@ -11,7 +11,7 @@ from sklearn.utils.validation import validate_data
 
 from ._param_validation import check_params
 
-__all__ = ["SampleTransformer", "as_sample_list", "median_scale"]
+__all__ = ["ObjectOutput", "SampleTransformer", "as_sample_list", "median_scale"]
 
 OUTPUTS = ("default", "pandas", "polars")
 
@@ -51,6 +51,33 @@ def as_sample_list(X, what: str = "meshes") -> list:
     return samples
 
 
+class ObjectOutput:
+    """Mixin of the stages whose output is one object per sample (a scalar field, a set
+    of diagrams), not a row of columns.
+
+    Subclasses are declared with ``auto_wrap_output_keys=None``: no output container
+    (``set_output``, ``sklearn.set_config(transform_output=...)``) ever wraps their
+    output.
+    """
+
+    def get_feature_names_out(self, input_features=None):
+        """Names of the output columns: none, the output is one object per sample.
+
+        It lets :meth:`sklearn.pipeline.Pipeline.get_feature_names_out` and
+        :class:`sklearn.pipeline.FeatureUnion` pass through this stage to the
+        vectorizers after it, which name their own columns.
+
+        Parameters
+        ----------
+        input_features : ignored
+
+        Returns
+        -------
+        ndarray of str of shape (0,)
+        """
+        return np.array([], dtype=object)
+
+
 class SampleTransformer(TransformerMixin, BaseEstimator):
     """Base of the transformers whose samples are meshes, scalar fields or diagrams.
 
@@ -68,8 +95,8 @@ class SampleTransformer(TransformerMixin, BaseEstimator):
     def set_output(self, *, transform=None):
         """Set the output container of ``transform`` and ``fit_transform``.
 
-        A transformer whose output is a table (it has ``get_feature_names_out``)
-        returns a DataFrame after ``set_output(transform="pandas")``. The others return
+        A transformer whose output is a table returns a DataFrame after
+        ``set_output(transform="pandas")``. The others (:class:`ObjectOutput`) return
         samples that are not rows (scalar fields, diagrams) and keep them as they are:
         they accept the call so that :meth:`sklearn.pipeline.Pipeline.set_output`, which
         configures every step, works on a pipeline that passes through them.

@@ -5,6 +5,7 @@ import pickle
 
 import numpy as np
 import pytest
+import sklearn
 from sklearn.base import clone
 from sklearn.linear_model import LogisticRegression
 from sklearn.metrics import pairwise_distances
@@ -39,6 +40,22 @@ def test_the_features_clone_and_pickle(fitted):
     np.testing.assert_array_equal(clone(pipe).fit_transform(meshes[:12]), X)
     restored = pickle.loads(pickle.dumps(pipe))
     np.testing.assert_array_equal(restored.transform(meshes[12:]), pipe.transform(meshes[12:]))
+
+
+def test_the_features_are_named_and_go_out_as_a_data_frame(fitted):
+    """The eigen and persistence stages pass no column names on (their output is one
+    object per sample); the union names each vectorizer's columns after its part."""
+    meshes, _, pipe, X = fitted
+    names = pipe.get_feature_names_out()
+    assert names.shape == (N_FEATURES,) and len(set(names)) == N_FEATURES
+    assert names[0] == "ord1__d0_landscape1_0" and names[-1] == "dna__eigenvalue_49"
+    frame = clone(pipe).set_output(transform="pandas").fit_transform(meshes[:12])
+    assert list(frame.columns) == list(names)
+    np.testing.assert_array_equal(frame.to_numpy(), X)
+    assert pipe[0].get_feature_names_out().shape == (0,)
+    with sklearn.config_context(transform_output="pandas"):  # never wraps fields
+        fields = pipe[0].transform(meshes[:2])
+    assert isinstance(fields, list) and len(fields) == 2  # not a DataFrame
 
 
 def test_the_parts_weigh_as_the_default_weighs_its_distances(fitted):

@@ -8,7 +8,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._base import SampleTransformer
+from .._base import ObjectOutput, SampleTransformer
 from .._param_validation import Interval, Options
 from .._progress import map_samples, sample_blocks
 from ..graph.validation import Graph
@@ -124,7 +124,7 @@ def _diagrams_block(block, **options):
     return out
 
 
-class LowerStarPersistence(SampleTransformer):
+class LowerStarPersistence(ObjectOutput, SampleTransformer, auto_wrap_output_keys=None):
     """Persistence diagrams of the lower-star filtrations of vertex functions.
 
     The second stage of the mesh-learning pipeline: each sample, a :class:`ScalarField`

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 from sklearn.utils import check_random_state
 
-from .._base import SampleTransformer
+from .._base import ObjectOutput, SampleTransformer
 from .._param_validation import HasMethods, Interval, Options
 from .._progress import map_samples
 from .._threads import one_blas_thread
@@ -136,7 +136,7 @@ def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
     return clean, values, vectors, complete, edges
 
 
-class LaplacianEigenTransformer(SampleTransformer):
+class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_output_keys=None):
     """Compute a Laplacian eigenfunction or signature on each mesh, point cloud or graph.
 
     The first stage of the mesh-learning pipeline: each mesh becomes a
