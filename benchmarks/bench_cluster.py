@@ -69,10 +69,10 @@ def load(per_class):
     return [read_mesh_file(bunch.filenames[i]) for i in keep]
 
 
-def stages(n_jobs):
-    """The default's eigen stage (no cache) and its diagram parts: ``(eigen, [(kind,
-    persistence, distance), ...])``, every stage with ``n_jobs``."""
-    pipeline = make_mesh_distance(n_jobs=n_jobs)
+def stages(n_jobs, memory=None):
+    """The default's eigen stage (no cache unless ``memory``) and its diagram parts:
+    ``(eigen, [(kind, persistence, distance), ...])``, every stage with ``n_jobs``."""
+    pipeline = make_mesh_distance(n_jobs=n_jobs, memory=memory)
     eigen = pipeline.named_steps["eigen"]
     parts = []
     for kind, part in pipeline.named_steps["distance"].transformer_list:
@@ -101,12 +101,15 @@ def jittered(diagrams, copies, seed=0):
     return out
 
 
-def run_stages(meshes, diagrams, n_jobs):
-    """Wall times and outputs of the eigen stage and of each kind's distance matrix."""
+def run_stages(meshes, diagrams, n_jobs, fields=None):
+    """Wall times and outputs of the eigen stage (unless its ``fields`` are given) and of
+    each kind's distance matrix."""
     eigen, parts = stages(n_jobs)
-    start = time.perf_counter()
-    fields = eigen.fit_transform(meshes)
-    times = {"eigen": time.perf_counter() - start}
+    times = {}
+    if fields is None:
+        start = time.perf_counter()
+        fields = eigen.fit_transform(meshes)
+        times["eigen"] = time.perf_counter() - start
     matrices = {}
     start = time.perf_counter()
     for kind, _, distance in parts:
@@ -129,19 +132,34 @@ def check_identical(fields, matrices, reference, label):
         )
 
 
-def task_summary(records, wall, n_workers):
-    """Compute seconds per task from dask's task stream, and the workers' busy share."""
-    computes = [
-        sum(s["stop"] - s["start"] for s in r["startstops"] if s["action"] == "compute")
-        for r in records
-    ]
-    computes = np.asarray(computes) if computes else np.zeros(1)
+def task_summary(records, start, stop, n_workers):
+    """From dask's task stream, over a stage run from ``start`` to ``stop`` (epoch
+    seconds): its tasks, their compute seconds on the workers (the work), the longest
+    task, the workers' busy share of the wall time (work / (workers x wall)), the tasks
+    each worker ran, and the longest time a worker sat idle within the stage (before
+    its first task, between two, after its last). The busy share and the idle gaps
+    depend on the schedule, not on how fast the tasks run: they hold under load."""
+    spans = {}
+    for record in records:
+        for s in record["startstops"]:
+            if s["action"] == "compute":
+                spans.setdefault(record["worker"], []).append((s["start"], s["stop"]))
+    computes = np.array([b - a for worker in spans.values() for a, b in worker] or [0.0])
+    gaps = [stop - start] * (n_workers - len(spans))  # a worker that ran nothing
+    for worker in spans.values():
+        end = start
+        for a, b in sorted(worker):
+            gaps.append(a - end)
+            end = max(end, b)
+        gaps.append(stop - end)
     return {
         "tasks": len(records),
         "compute_s": float(computes.sum()),
         "largest_task_s": float(computes.max()),
         "median_task_s": float(np.median(computes)),
-        "busy": float(computes.sum() / (wall * n_workers)),
+        "busy": float(computes.sum() / ((stop - start) * n_workers)),
+        "tasks_per_worker": sorted((len(worker) for worker in spans.values()), reverse=True),
+        "longest_idle_s": float(max(gaps)),
     }
 
 
@@ -177,7 +195,7 @@ def shipping(client, meshes):
     }
 
 
-def on_cluster(n_workers, meshes, diagrams, reference):
+def on_cluster(n_workers, meshes, diagrams, reference, measured):
     from distributed import Client, LocalCluster, get_task_stream
 
     with ExitStack() as stack:
@@ -198,26 +216,26 @@ def on_cluster(n_workers, meshes, diagrams, reference):
         client.wait_for_workers(n_workers)
         client.run(_warm)
         result = {"start_and_warm_s": time.perf_counter() - start}
-        with parallel_backend("dask", **({"resources": slot} if slot else {})):
-            eigen, parts = stages(n_jobs=-1)
-            with get_task_stream(client) as stream:
-                start, cpu = time.perf_counter(), time.process_time()
-                fields = eigen.fit_transform(meshes)
-                wall, cpu = time.perf_counter() - start, time.process_time() - cpu
-            summary = task_summary(stream.data, wall, n_workers)
-            result["eigen"] = {"wall_s": wall, "client_cpu_s": cpu, **summary}
-            matrices, records, wall, cpu = {}, [], 0.0, 0.0
+        fields, matrices = reference[0], {}
+        eigen, parts = stages(n_jobs=-1)
+
+        def distances():
             for kind, _, distance in parts:
+                matrices[kind] = clone(distance).fit_transform(diagrams[kind])
+
+        with parallel_backend("dask", **({"resources": slot} if slot else {})):
+            for stage in measured:
                 with get_task_stream(client) as stream:
-                    start, begun = time.perf_counter(), time.process_time()
-                    matrices[kind] = clone(distance).fit_transform(diagrams[kind])
-                    wall += time.perf_counter() - start
-                    cpu += time.process_time() - begun
-                records += stream.data
-            summary = task_summary(records, wall, n_workers)
-            result["distances"] = {"wall_s": wall, "client_cpu_s": cpu, **summary}
+                    start, cpu = time.time(), time.process_time()
+                    if stage == "eigen":
+                        fields = eigen.fit_transform(meshes)
+                    else:
+                        distances()
+                    stop, cpu = time.time(), time.process_time() - cpu
+                summary = task_summary(stream.data, start, stop, n_workers)
+                result[stage] = {"wall_s": stop - start, "client_cpu_s": cpu, **summary}
         check_identical(fields, matrices, reference, f"{n_workers} dask worker(s)")
-        if n_workers == max(WORKERS):
+        if n_workers == max(WORKERS) and "eigen" in measured:
             result["shipping"] = shipping(client, meshes)
     return result
 
@@ -242,7 +260,7 @@ def schedule(meshes, copies):
         start = time.process_time()
         fields[i] = eigen.fit_transform([meshes[i]])[0]
         solves.append(time.process_time() - start)
-    calls, block, matrix = [], pairwise._block, pairwise.pair_matrix
+    calls, block, matrices = [], pairwise._block, pairwise.pair_matrices
 
     def timed_block(*args):
         start = time.process_time()
@@ -250,11 +268,11 @@ def schedule(meshes, copies):
         calls[-1].append(time.process_time() - start)
         return values
 
-    def counted_matrix(*args, **kwargs):
+    def counted_matrices(*args, **kwargs):
         calls.append([])
-        return matrix(*args, **kwargs)
+        return matrices(*args, **kwargs)
 
-    pairwise._block, pairwise.pair_matrix = timed_block, counted_matrix
+    pairwise._block, pairwise.pair_matrices = timed_block, counted_matrices
     pairwise.effective_n_jobs = lambda n_jobs: max(WORKERS)  # the blocks of 2 workers
     total = 0.0
     for _, persistence, distance in parts:
@@ -282,6 +300,12 @@ def main():
     parser.add_argument("--copies", type=int, default=10, help="copies of each diagram sample")
     parser.add_argument("--json", default=None, help="write the results to this file")
     parser.add_argument("--schedule", action="store_true", help="CPU seconds per task only")
+    parser.add_argument(
+        "--distances-only",
+        action="store_true",
+        help="time the distance blocks only (the reference's eigen stage cached in --memory)",
+    )
+    parser.add_argument("--memory", default=None, help="eigen cache of --distances-only")
     args = parser.parse_args()
 
     start = time.perf_counter()
@@ -297,7 +321,8 @@ def main():
         return schedule(meshes, args.copies)
 
     # The reference: one core, in this process.
-    eigen, parts = stages(n_jobs=1)
+    measured = ("distances",) if args.distances_only else ("eigen", "distances")
+    eigen, parts = stages(n_jobs=1, memory=args.memory if args.distances_only else None)
     start, cpu = time.perf_counter(), time.process_time()
     ref_fields = eigen.fit_transform(meshes)
     local = {"eigen": time.perf_counter() - start}
@@ -319,53 +344,61 @@ def main():
     )
 
     with parallel_backend("loky", n_jobs=2):
-        loky, fields, matrices = run_stages(meshes, diagrams, n_jobs=2)
+        given = ref_fields if args.distances_only else None
+        loky, fields, matrices = run_stages(meshes, diagrams, n_jobs=2, fields=given)
     check_identical(fields, matrices, reference, "loky")
     del fields, matrices
 
-    results = {n: on_cluster(n, meshes, diagrams, reference) for n in WORKERS}
+    results = {n: on_cluster(n, meshes, diagrams, reference, measured) for n in WORKERS}
     print("results bitwise identical to the local run: loky and every cluster")
     print()
-    print("| run | eigen, s | speed-up | distances, s | speed-up |")
-    print("|---|---:|---:|---:|---:|")
+    print("| run | " + " | ".join(f"{stage}, s | speed-up" for stage in measured) + " |")
+    print("|---|" + "---:|---:|" * len(measured))
     base = results[1]
-    print(f"| local, 1 core | {local['eigen']:.1f} | | {local['distances']:.1f} | |")
+    print("| local, 1 core | " + " | ".join(f"{local[stage]:.1f} | " for stage in measured) + " |")
     print(
-        f"| loky, 2 workers | {loky['eigen']:.1f} | {local['eigen'] / loky['eigen']:.2f} "
-        f"(of local) | {loky['distances']:.1f} | "
-        f"{local['distances'] / loky['distances']:.2f} (of local) |"
+        "| loky, 2 workers | "
+        + " | ".join(
+            f"{loky[stage]:.1f} | {local[stage] / loky[stage]:.2f} (of local)" for stage in measured
+        )
+        + " |"
     )
     for n, r in results.items():
-        print(
-            f"| dask, {n} worker(s) | {r['eigen']['wall_s']:.1f} | "
-            f"{base['eigen']['wall_s'] / r['eigen']['wall_s']:.2f} | "
-            f"{r['distances']['wall_s']:.1f} | "
-            f"{base['distances']['wall_s'] / r['distances']['wall_s']:.2f} |"
+        cells = (
+            f"{r[stage]['wall_s']:.1f} | {base[stage]['wall_s'] / r[stage]['wall_s']:.2f}"
+            for stage in measured
         )
+        print(f"| dask, {n} worker(s) | " + " | ".join(cells) + " |")
     print()
-    for stage in ("eigen", "distances"):
+    for stage in measured:
         speedup = base[stage]["wall_s"] / results[max(WORKERS)][stage]["wall_s"]
         verdict = "met" if speedup >= TARGET else "NOT met"
         print(f"{stage}: speed-up {speedup:.2f} from 1 to 2 workers, target {TARGET}: {verdict}")
     print()
-    print("| cluster, stage | tasks | work, s | longest task, s | busy | caller CPU, s |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print(
+        "| cluster, stage | tasks | per worker | work, s | longest task, s | busy | "
+        "longest idle, s | caller CPU, s |"
+    )
+    print("|---|---:|---|---:|---:|---:|---:|---:|")
     for n, r in results.items():
-        for stage in ("eigen", "distances"):
+        for stage in measured:
             s = r[stage]
             print(
-                f"| {n} worker(s), {stage} | {s['tasks']} | {s['compute_s']:.1f} | "
-                f"{s['largest_task_s']:.2f} | {s['busy']:.0%} | {s['client_cpu_s']:.1f} |"
+                f"| {n} worker(s), {stage} | {s['tasks']} | "
+                f"{' + '.join(map(str, s['tasks_per_worker']))} | {s['compute_s']:.1f} | "
+                f"{s['largest_task_s']:.2f} | {s['busy']:.0%} | {s['longest_idle_s']:.2f} | "
+                f"{s['client_cpu_s']:.1f} |"
             )
-    ship = results[max(WORKERS)]["shipping"]
-    print()
-    print(
-        f"shipping {len(meshes)} meshes ({sum(nbytes) / 1e6:.1f} MB pickled) to 2 workers: "
-        f"with each task {ship['with_each_task_s']:.2f} s, scattered first "
-        f"{ship['scatter_then_tasks_s']:.2f} s, the same tasks without a mesh "
-        f"{ship['empty_tasks_s']:.2f} s; workers started and warmed in "
-        + ", ".join(f"{r['start_and_warm_s']:.1f} s ({n})" for n, r in results.items())
-    )
+    if "shipping" in results[max(WORKERS)]:
+        ship = results[max(WORKERS)]["shipping"]
+        print()
+        print(
+            f"shipping {len(meshes)} meshes ({sum(nbytes) / 1e6:.1f} MB pickled) to 2 workers: "
+            f"with each task {ship['with_each_task_s']:.2f} s, scattered first "
+            f"{ship['scatter_then_tasks_s']:.2f} s, the same tasks without a mesh "
+            f"{ship['empty_tasks_s']:.2f} s; workers started and warmed in "
+            + ", ".join(f"{r['start_and_warm_s']:.1f} s ({n})" for n, r in results.items())
+        )
     if args.json:
         with open(args.json, "w") as out:
             payload = {"local": local, "loky": loky, "meshes": len(meshes)}

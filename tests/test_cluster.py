@@ -105,7 +105,7 @@ def test_diagrams_go_to_the_cluster_once_per_call_not_with_each_task(client, mon
     assert len(stream.data) > 1
 
 
-def uneven_samples(n=40, seed=0):
+def uneven_samples(n=60, seed=0):
     """Samples of three diagrams: the first of 1 point, the second of 2 to 40 points
     (its pairs cost most, unevenly), the third empty but for an essential point."""
     rng = np.random.default_rng(seed)
@@ -165,7 +165,7 @@ def test_n_jobs_1_under_the_dask_backend_runs_nothing_on_the_cluster(client, mes
         blocks = combined_and_stacks(n_jobs=1)
     np.testing.assert_array_equal(matrix, local)
     assert stream.data == []
-    assert blocks[0].shape == (40, 40)
+    assert blocks[0].shape == (60, 60)
 
 
 def test_the_samples_go_to_every_worker_at_once(client, monkeypatch):

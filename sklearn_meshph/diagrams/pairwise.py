@@ -53,6 +53,9 @@ _BLOCKS_PER_WORKER = 16
 # Wasserstein), 1 for the sliced Wasserstein distance. Only the blocks' boundaries and
 # order depend on it, never a value.
 _PAIR_COST = 80.0
+# A block costs at least about this many pairs of small diagrams (some milliseconds of
+# work): below, sending the task would cost more than computing it.
+_MIN_TASK_COST = 5_000 * _PAIR_COST
 
 
 def _row_blocks(n_rows, weights, n_tasks):
@@ -429,17 +432,17 @@ def pair_matrices(requests, *, n_jobs=None, verbose=0, desc="distances") -> list
     parallel call.
 
     Every matrix is cut into consecutive row blocks of about equal estimated cost,
-    ``_BLOCKS_PER_WORKER`` per worker for the whole call (a cheap matrix is one block),
-    and at most a million pairs each; the blocks go costliest first, so the call ends
-    on small ones and no worker waits long for another's block. The samples the blocks
-    read are sent to every worker of a dask cluster once per call. With one worker
-    (``n_jobs=1``, under any backend) the blocks run here, one after the other. Each
-    value is computed alone, so the matrices do not depend on the blocks: neither on
-    ``n_jobs`` nor on the backend.
+    ``_BLOCKS_PER_WORKER`` per worker for the whole call (a cheap matrix is one block;
+    none much cheaper than ``_MIN_TASK_COST``), of at most a million pairs each; the
+    blocks go costliest first, so the call ends on small ones and no worker waits long
+    for another's block. The samples the blocks read are sent to every worker of a dask
+    cluster once per call. With one worker (``n_jobs=1``, under any backend) the blocks
+    run here, one after the other. Each value is computed alone, so the matrices do not
+    depend on the blocks: neither on ``n_jobs`` nor on the backend.
     """
     workers = effective_n_jobs(n_jobs)
     total = sum(float(r.row_costs.sum()) for r in requests)
-    target = None if workers == 1 else total / (_BLOCKS_PER_WORKER * workers)
+    target = None if workers == 1 else max(total / (_BLOCKS_PER_WORKER * workers), _MIN_TASK_COST)
     tasks = [(r, a, b, cost) for r in requests for a, b, cost in r.blocks(target)]
     tasks.sort(key=lambda task: -task[3])  # stable: ties keep the requests' order
     sides = {}
