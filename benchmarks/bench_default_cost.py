@@ -2,7 +2,7 @@
 eigensolve, and its accuracy.
 
     python benchmarks/bench_default_cost.py [--collection watertight_dev] [--out FILE]
-        [--memory-meshes 3] [--skip-former-accuracy]
+        [--memory-meshes 3] [--skip-former-accuracy] [--fewer N]
 
 Runs ``make_mesh_distance()`` with ``memory=None`` (no eigen cache: every solve is
 done), ``n_jobs=1`` and one BLAS thread, and measures CPU time (``time.process_time``,
@@ -12,9 +12,14 @@ one, then the other, so that a load that changes during the run weighs on both a
 
 - ``former``: ARPACK to machine precision (``tol=0``) with a basis of twice the
   eigenpairs plus one, the settings before issue 29;
-- ``current``: the library's (``_TOLERANCE``, ``_BASIS_RATIO`` of
-  ``sklearn_meshph.spectral.eigensolver``), solved again at the former settings when
-  the spectrum has repeated eigenvalues.
+- ``current``: the library's: an unrestarted Lanczos run with partial
+  reorthogonalization (``sklearn_meshph.spectral.lanczos``), checked by the inertia of
+  ``L - tau M``, ARPACK at the former settings when the check fails (counted:
+  ``fallbacks``).
+
+``--fewer N`` adds a third setting, ``fewer``: the current solve of ``N`` eigenpairs, with
+the Shape-DNA of ``N`` (``eigen__n_eigenpairs`` and ``distance__dna__spectrum__n_eigenpairs``
+set to ``N``), timed and scored in the same way (its peak memory is not measured).
 
 The distance stage (extended persistence of the signatures, the four distance matrices
 and their combination) is then timed over all meshes, and the accuracy is leave-one-out
@@ -61,9 +66,9 @@ with settings(name):
 print(status("VmHWM:") - before)
 """
 
-# The solve's settings before issue 29: machine precision, a basis of 2k + 1 vectors,
-# no second solve (a tolerance of -1 finds no repeats).
-FORMER = {"_TOLERANCE": 0.0, "_BASIS_RATIO": 2.0, "_REPEATED_RTOL": -1.0}
+# The solve before issue 29: ARPACK alone, at machine precision, a basis of 2k + 1
+# vectors.
+FORMER = {"_LANCZOS": False}
 SETTINGS = ("former", "current")
 
 
@@ -106,6 +111,7 @@ def main():
         help="score the current settings only (the distance stage is not timed twice)",
     )
     parser.add_argument("--memory-only", action="store_true", help="peak memory alone")
+    parser.add_argument("--fewer", type=int, default=None, help="also the current solve of N")
     parser.add_argument("--out", default=None, help="write the results as JSON")
     args = parser.parse_args()
 
@@ -120,48 +126,63 @@ def main():
             sizes = [len(meshes[i].vertices) for i in largest]
             print(name, dict(zip(sizes, peak_memory(paths, name), strict=True)))
         return
-    pipe = make_mesh_distance(memory=None, n_jobs=1)
-    eigen, distance = pipe.named_steps["eigen"], pipe.named_steps["distance"]
-    eigen.fit_transform(meshes[:1])  # compiles what is compiled once per process
-    fields = {name: [] for name in SETTINGS}
-    seconds = {name: [] for name in SETTINGS}
+    names = SETTINGS + (("fewer",) if args.fewer else ())
+    pipes = {name: make_mesh_distance(memory=None, n_jobs=1) for name in names}
+    if args.fewer:
+        pipes["fewer"].set_params(
+            eigen__n_eigenpairs=args.fewer, distance__dna__spectrum__n_eigenpairs=args.fewer
+        )
+    for name in names:  # compiles what is compiled once per process, not timed
+        with settings(name):
+            pipes[name].fit_transform(meshes[:4])
+    fields = {name: [] for name in names}
+    seconds = {name: [] for name in names}
+    arpack, fallbacks = eigensolver._shift_invert, []
+
+    def counted(*args):  # ARPACK under the current settings: the check failed
+        fallbacks.append(args[0].shape[0])
+        return arpack(*args)
+
     for i, mesh in enumerate(meshes):
-        for name in SETTINGS:
+        for name in names:
             with settings(name):
+                if name == "current":
+                    eigensolver._shift_invert = counted
                 start = time.process_time()
-                fields[name].extend(eigen.fit_transform([mesh]))
+                fields[name].extend(pipes[name].named_steps["eigen"].fit_transform([mesh]))
                 seconds[name].append(time.process_time() - start)
+                eigensolver._shift_invert = arpack
         if i % 20 == 19:
             print(i + 1, {k: round(sum(v), 1) for k, v in seconds.items()}, flush=True)
     sizes = [len(field.vertices) for field in fields["current"]]
     largest = np.argsort(sizes)[::-1][: args.memory_meshes]
     result = {"meshes": len(meshes), "vertices": int(np.sum(sizes))}
-    for name in SETTINGS:
+    for name in names:
         eigen_seconds = float(np.sum(seconds[name]))
         entry = {
             "eigen_seconds": eigen_seconds,
             "eigen_ms_per_mesh": 1e3 * eigen_seconds / len(meshes),
-            "peak_mb": dict(
-                zip(
-                    (str(sizes[i]) for i in largest),
-                    peak_memory([bunch.filenames[i] for i in largest], name),
-                    strict=True,
-                )
-            ),
             "per_mesh_seconds": seconds[name],
         }
-        if name == "current":
-            entry["max_relative_eigenvalue_change"] = max(  # the constant's 0 left out
-                float(np.max(np.abs(a.spectrum[1:] / b.spectrum[1:] - 1)))
-                for a, b in zip(fields["current"], fields["former"], strict=True)
+        if name in SETTINGS:
+            paths = [bunch.filenames[i] for i in largest]
+            entry["peak_mb"] = dict(
+                zip((str(sizes[i]) for i in largest), peak_memory(paths, name), strict=True)
             )
+        if name != "former":
+            entry["max_relative_eigenvalue_change"] = max(  # the constant's 0 left out
+                float(np.max(np.abs(a.spectrum[1:] / b.spectrum[1 : len(a.spectrum)] - 1)))
+                for a, b in zip(fields[name], fields["former"], strict=True)
+            )
+        if name == "current":
+            entry["fallbacks"] = fallbacks
             entry["max_signature_change"] = max(
                 float(np.max(np.abs(a.values - b.values)))
                 for a, b in zip(fields["current"], fields["former"], strict=True)
             )
-        if name == "current" or not args.skip_former_accuracy:
+        if name != "former" or not args.skip_former_accuracy:
             start = time.process_time()
-            matrix = distance.fit_transform(fields[name])
+            matrix = pipes[name].named_steps["distance"].fit_transform(fields[name])
             entry["distance_seconds"] = time.process_time() - start
             entry["per_mesh_ms"] = 1e3 * (eigen_seconds + entry["distance_seconds"]) / len(meshes)
             entry["loo_1nn"] = loo_1nn(matrix, y)

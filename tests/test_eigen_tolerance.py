@@ -1,13 +1,18 @@
-"""The shift-invert solve's tolerance: a loose one where the spectrum is simple, machine
-precision again where it has repeated eigenvalues (symmetric meshes)."""
+"""The shift-invert solve: an unrestarted Lanczos run with partial reorthogonalization,
+checked by an inertia count (the eigenvalues below a shift), and ARPACK at machine
+precision where the check fails (a copy of a repeated eigenvalue missed)."""
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import trimesh
 from conftest import irregular_ellipsoid
 
 from sklearn_meshph.spectral import eigensolver
+from sklearn_meshph.spectral._cholesky import SupernodalCholesky, negative_eigenvalues
 from sklearn_meshph.spectral.eigensolver import dense_eigenpairs, generalized_eigenpairs
+from sklearn_meshph.spectral.factorization import fill_reducing_order
+from sklearn_meshph.spectral.lanczos import shift_invert_lanczos
 from sklearn_meshph.spectral.laplacians import cotangent_laplacian
 
 
@@ -16,25 +21,25 @@ def operator(vertices, faces):
     return L, M / M.diagonal().sum()
 
 
-def counting_eigsh(monkeypatch):
-    """Record the ``tol`` of every ARPACK call of the eigensolver."""
+def counting_arpack(monkeypatch):
+    """Record the size of every ARPACK solve of the eigensolver."""
     calls = []
     original = eigensolver.eigsh
 
-    def eigsh(*args, **kwargs):
-        calls.append(kwargs["tol"])
-        return original(*args, **kwargs)
+    def eigsh(A, *args, **kwargs):
+        calls.append(A.shape[0])
+        return original(A, *args, **kwargs)
 
     monkeypatch.setattr(eigensolver, "eigsh", eigsh)
     return calls
 
 
-def test_a_simple_spectrum_is_solved_once_at_the_loose_tolerance(monkeypatch):
+def test_a_simple_spectrum_is_solved_by_lanczos_alone(monkeypatch):
     vertices, faces = irregular_ellipsoid(3, seed=1)
     L, M = operator(vertices, faces)
-    calls = counting_eigsh(monkeypatch)
+    calls = counting_arpack(monkeypatch)
     values, vectors = generalized_eigenpairs(L, M, 56, points=vertices)
-    assert calls == [eigensolver._TOLERANCE]
+    assert calls == []
     precise, precise_vectors = dense_eigenpairs(L, M.diagonal(), 56)
     np.testing.assert_allclose(values[1:], precise[1:], rtol=1e-10)
     mass = M.diagonal()
@@ -46,21 +51,104 @@ def test_a_simple_spectrum_is_solved_once_at_the_loose_tolerance(monkeypatch):
     np.testing.assert_allclose(hks, reference, rtol=1e-8)
 
 
+def box(n=8):
+    """A cube's surface, each face an n x n grid: a spectrum of repeated eigenvalues."""
+    mesh = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    for _ in range(int(np.log2(n))):
+        mesh = mesh.subdivide()
+    return mesh
+
+
+SYMMETRIC = {
+    "icosphere": lambda: trimesh.creation.icosphere(3),
+    "torus": lambda: trimesh.creation.torus(1.0, 0.4, major_sections=32, minor_sections=16),
+    "box": box,
+}
+
+
 @pytest.mark.parametrize("n_eigenpairs", [24, 56])
-def test_repeated_eigenvalues_of_a_symmetric_sphere_are_all_found(monkeypatch, n_eigenpairs):
-    # The icosphere's spectrum repeats each l (l + 1) 2l + 1 times (to rounding): a
-    # single Lanczos vector stopped early misses copies, the precise solve finds them.
-    sphere = trimesh.creation.icosphere(3)
-    L, M = operator(sphere.vertices, sphere.faces)
-    calls = counting_eigsh(monkeypatch)
-    values, _ = generalized_eigenpairs(L, M, n_eigenpairs, points=sphere.vertices)
-    assert calls == [eigensolver._TOLERANCE, 0.0]
-    expected, _ = dense_eigenpairs(L, M.diagonal(), n_eigenpairs)
-    np.testing.assert_allclose(values[1:], expected[1:], rtol=1e-9)
+@pytest.mark.parametrize("shape", sorted(SYMMETRIC))
+def test_repeated_eigenvalues_of_symmetric_shapes_are_all_found(shape, n_eigenpairs):
+    # A single Krylov sequence misses copies of repeated eigenvalues: the inertia count
+    # sees it, and ARPACK to machine precision finds them all.
+    mesh = SYMMETRIC[shape]()
+    L, M = operator(mesh.vertices, mesh.faces)
+    values, vectors = generalized_eigenpairs(L, M, n_eigenpairs, points=mesh.vertices)
+    expected, expected_vectors = dense_eigenpairs(L, M.diagonal(), n_eigenpairs + 20)
+    np.testing.assert_allclose(values[1:], expected[1:n_eigenpairs], rtol=1e-9)
+    # The same eigenspaces: every computed vector lies in the span of the dense ones up
+    # to the last eigenvalue's whole eigenspace (it may go on past the last one asked).
+    span = expected_vectors[:, expected <= values[-1] * (1 + 1e-8)]
+    mass = M.diagonal()
+    overlap = (span.T * mass) @ vectors
+    np.testing.assert_allclose(np.linalg.svd(overlap, compute_uv=False), 1.0, atol=1e-7)
 
 
-def test_repeats_are_eigenvalues_within_the_relative_tolerance():
-    assert not eigensolver._has_repeats(np.array([0.0, 1.0, 1.01, 2.0]))
-    assert eigensolver._has_repeats(np.array([0.0, 1.0, 1.0 + 1e-9, 2.0]))
-    assert eigensolver._has_repeats(np.array([0.0, 1e-17, 1.0, 2.0]))  # two zeros
-    assert not eigensolver._has_repeats(np.array([-1e-17, 1.0, 2.0]))
+def test_a_missed_eigenvalue_is_caught_by_the_inertia_count(monkeypatch):
+    # A broken run that drops the 10th eigenpair (and so reports the 57th as the 56th):
+    # each value is a true eigenvalue, no two are close, only the count can tell.
+    vertices, faces = irregular_ellipsoid(3, seed=1)
+    L, M = operator(vertices, faces)
+    original = eigensolver.shift_invert_lanczos
+
+    def missing_one(factor, mass, n_eigenpairs, **kwargs):
+        theta, vectors = original(factor, mass, n_eigenpairs + 1, **kwargs)
+        keep = np.delete(np.arange(n_eigenpairs + 2), 9)
+        return theta[keep], vectors[keep[:-1]]
+
+    monkeypatch.setattr(eigensolver, "shift_invert_lanczos", missing_one)
+    calls = counting_arpack(monkeypatch)
+    values, _ = generalized_eigenpairs(L, M, 56, points=vertices)
+    assert len(calls) == 1
+    expected, _ = dense_eigenpairs(L, M.diagonal(), 56)
+    np.testing.assert_allclose(values[1:], expected[1:], rtol=1e-10)
+
+
+def test_a_boundary_through_a_repeated_eigenvalue_goes_to_arpack(monkeypatch):
+    # The last eigenpair asked for and the next one agree: no shift separates them.
+    vertices, faces = irregular_ellipsoid(3, seed=1)
+    L, M = operator(vertices, faces)
+    original = eigensolver.shift_invert_lanczos
+
+    def tied(*args, **kwargs):
+        theta, vectors = original(*args, **kwargs)
+        theta[-1] = theta[-2] * (1 - 1e-9)
+        return theta, vectors
+
+    monkeypatch.setattr(eigensolver, "shift_invert_lanczos", tied)
+    calls = counting_arpack(monkeypatch)
+    generalized_eigenpairs(L, M, 20, points=vertices)
+    assert len(calls) == 1
+
+
+def test_the_inertia_count_is_the_number_of_eigenvalues_below_the_shift():
+    vertices, faces = irregular_ellipsoid(2, seed=3)
+    L, M = operator(vertices, faces)
+    values = np.linalg.eigvalsh(
+        np.diag(M.diagonal() ** -0.5) @ L.toarray() @ np.diag(M.diagonal() ** -0.5)
+    )
+    perm = fill_reducing_order(L.tocsr(), vertices)
+    for count in [0, 1, 2, 7, 30, 80, len(values) - 1]:
+        tau = -1.0 if count == 0 else 0.5 * (values[count - 1] + values[count])
+        assert negative_eigenvalues(L - tau * M, perm) == count
+        assert negative_eigenvalues(L - tau * M) == count  # any order
+    with pytest.raises(ValueError, match="zero pivot"):
+        negative_eigenvalues(sp.csr_matrix(np.diag([1.0, 0.0, 2.0])))
+
+
+def test_lanczos_finds_a_known_spectrum_under_a_dominant_eigenvalue():
+    # As in shift-invert, theta_0 = 1 / |sigma| dominates the others. (Orthogonality
+    # estimates that leave the operator's norm out of the rounding term let copies of
+    # its eigenvector crowd out the eigenpairs asked for on real meshes: the ellipsoid
+    # test above then falls back to ARPACK.)
+    n = 600
+    theta = np.concatenate([[1e3], 1.0 / np.arange(1, n)])
+    rng = np.random.default_rng(0)
+    Q = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    factor = SupernodalCholesky(sp.csr_matrix((Q / theta) @ Q.T))  # C = A^-1
+    found = shift_invert_lanczos(
+        factor, np.ones(n), 40, v0=rng.uniform(-1, 1, n), tol=1e-8, max_steps=164
+    )
+    assert found is not None
+    np.testing.assert_allclose(found[0], theta[:41], rtol=1e-10)
+    np.testing.assert_allclose(np.abs(found[1] @ Q[:, :40]), np.eye(40), atol=1e-7)

@@ -30,8 +30,9 @@ import scipy.sparse as sp
 from numba.extending import get_cython_function_address
 
 from .._threads import one_blas_thread
+from ._triangular import BLAS, solve_panels
 
-__all__ = ["SupernodalCholesky", "check_square_finite"]
+__all__ = ["SupernodalCholesky", "check_square_finite", "negative_eigenvalues"]
 
 # Relaxed amalgamation (CHOLMOD's thresholds): a supernode and its parent merge when the
 # merged panel has at most 4 columns, or at most 16 with below 80% explicit zeros, or at
@@ -47,12 +48,6 @@ _dtrsm = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P)(
 )
 _dsyrk = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P)(
     get_cython_function_address("scipy.linalg.cython_blas", "dsyrk")
-)
-_dtpsv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P)(
-    get_cython_function_address("scipy.linalg.cython_blas", "dtpsv")
-)
-_dgemv = ctypes.CFUNCTYPE(None, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P)(
-    get_cython_function_address("scipy.linalg.cython_blas", "dgemv")
 )
 
 
@@ -248,7 +243,29 @@ def _symbolic_rows(n, indptr, indices, first, sparent):
 
 
 @numba.njit(cache=True)
-def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, lapack):
+def _signed_diagonal(front, nc, signs):
+    """``front[:nc, :nc] = C S C^T`` (lower triangles) without pivoting: ``C`` overwrites
+    it, ``S = diag(signs)`` gets the pivots' signs. Returns 0, or 1 + the column of a
+    zero (or not finite) pivot."""
+    for j in range(nc):
+        d = front[j, j]
+        for p in range(j):
+            d -= front[j, p] * front[j, p] * signs[p]
+        if not (d != 0.0 and np.isfinite(d)):
+            return j + 1
+        signs[j] = 1.0 if d > 0.0 else -1.0
+        pivot = np.sqrt(abs(d))
+        front[j, j] = pivot
+        for i in range(j + 1, nc):
+            value = front[i, j]
+            for p in range(j):
+                value -= front[i, p] * front[j, p] * signs[p]
+            front[i, j] = value / (signs[j] * pivot)
+    return 0
+
+
+@numba.njit(cache=True)
+def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, lapack, signs):
     """Multifrontal numeric factorization; returns (panel offsets, panels, info).
 
     Panel ``s`` holds the supernode's columns of ``L``: its lower triangular diagonal
@@ -258,6 +275,11 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
     column where the matrix was found not positive definite. ``lapack`` holds the ctypes
     functions ``(dpotrf, dtrsm, dsyrk)``: passed as an argument rather than read as
     globals, so that numba can cache the compiled function.
+
+    ``signs`` (length ``n``, or empty) asks for the factorization ``C S C^T`` of a
+    symmetric indefinite matrix instead, ``S`` diagonal of +-1 written to ``signs``, with
+    no pivoting (by Sylvester's law of inertia, the count of -1 is the number of negative
+    eigenvalues); ``info`` then flags a zero pivot only.
     """
     dpotrf, dtrsm, dsyrk = lapack
     ns = len(first) - 1
@@ -309,7 +331,13 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
         ints[0] = nc
         ints[1] = nr
         ints[2] = 0
-        dpotrf(chars[0:].ctypes, ints[0:].ctypes, front.ctypes, ints[1:].ctypes, ints[2:].ctypes)
+        signed = len(signs) > 0
+        if signed:
+            ints[2] = _signed_diagonal(front, nc, signs[f:])
+        else:
+            dpotrf(
+                chars[0:].ctypes, ints[0:].ctypes, front.ctypes, ints[1:].ctypes, ints[2:].ctypes
+            )
         if ints[2] != 0:
             return lptr, lx, f + ints[2]
         m = nr - nc
@@ -344,6 +372,16 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
                 corner.ctypes,
                 ints[1:].ctypes,
             )
+            # Signed: W = F21 C11^{-T} above, F22 -= W S W^T (twice the negative columns'
+            # rank-one terms back), and C21 = W S.
+            for c in range(nc if signed else 0):
+                if signs[f + c] < 0.0:
+                    for a in range(m):
+                        twice = 2.0 * below[a, c]
+                        for b in range(a + 1):
+                            corner[a, b] += twice * below[b, c]
+                    for a in range(m):
+                        below[a, c] = -below[a, c]
             update = np.empty((m, m))
             for a in range(m):
                 for b in range(a + 1):
@@ -359,128 +397,6 @@ def _numeric(n, indptr, indices, data, first, rowptr, rowind, child_ptr, child, 
                 lx[k] = front[t, c]
                 k += 1
     return lptr, lx, 0
-
-
-# Supernodes of at least this many columns are solved with BLAS (dtpsv and dgemv); the
-# many small ones with compiled loops, cheaper than a call.
-_BLAS_SOLVE_COLUMNS = 8
-
-
-@numba.njit(cache=True, inline="always")
-def _panel(first, rowptr, lptr, s, ints):
-    """Supernode ``s``: first column, columns ``nc``, start of the rows below its diagonal
-    block in ``rowind``, their count ``m``, and the offsets of its diagonal block and of
-    the block below in ``lx``. Sets ``ints[:2]`` to ``nc, m`` for the BLAS calls."""
-    f = first[s]
-    nc = first[s + 1] - f
-    r0 = rowptr[s] + nc
-    m = rowptr[s + 1] - r0
-    base = lptr[s]
-    ints[0] = nc
-    ints[1] = m
-    return f, nc, r0, m, base, base + nc * (nc + 1) // 2
-
-
-@numba.njit(cache=True, inline="always")
-def _tpsv(dtpsv, chars, ints, trans, ap, x):
-    """``x <- U^{-T} x`` (``trans=1``) or ``U^{-1} x`` (``trans=2``) for the upper triangle
-    ``U`` of order ``ints[0]`` packed by columns in ``ap``; ``chars`` is "UTN"."""
-    dtpsv(
-        chars[0:].ctypes,
-        chars[trans:].ctypes,
-        chars[2:].ctypes,
-        ints[0:].ctypes,
-        ap.ctypes,
-        x.ctypes,
-        ints[2:].ctypes,
-    )
-
-
-@numba.njit(cache=True, inline="always")
-def _gemv(dgemv, chars, ints, scalars, trans, alpha, beta, a, x, y):
-    """``y <- scalars[alpha] op(A) x + scalars[beta] y`` for the ``ints[1] x ints[0]``
-    column-major ``A`` in ``a``; ``op`` is the transpose with ``trans=1``, none with 2."""
-    dgemv(
-        chars[trans:].ctypes,
-        ints[1:].ctypes,
-        ints[0:].ctypes,
-        scalars[alpha:].ctypes,
-        a.ctypes,
-        ints[1:].ctypes,
-        x.ctypes,
-        ints[2:].ctypes,
-        scalars[beta:].ctypes,
-        y.ctypes,
-        ints[2:].ctypes,
-    )
-
-
-# Reassociation lets the compiler vectorize the dot products (a fixed order for a given
-# machine and build: results stay reproducible).
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _solve(x, first, rowptr, rowind, lptr, lx, work, blas):
-    """Overwrite ``x`` (permuted) with ``(L L^T)^{-1} x``; ``work`` has length >= n.
-
-    ``blas`` holds the ctypes functions ``(dtpsv, dgemv)``. In Fortran's view a lower
-    triangle packed by rows is the upper triangle ``U = L11^T`` packed by columns, and the
-    block below, stored by columns, is ``L21`` with leading dimension ``m``.
-    """
-    dtpsv, dgemv = blas
-    chars = np.array([ord("U"), ord("T"), ord("N")], np.uint8)
-    ints = np.array([0, 0, 1], np.int32)  # nc, m, increment 1
-    scalars = np.array([1.0, 0.0, -1.0])
-    ns = len(first) - 1
-    for s in range(ns):  # forward: L y = x
-        f, nc, r0, m, base, below = _panel(first, rowptr, lptr, s, ints)
-        use_blas = nc >= _BLAS_SOLVE_COLUMNS
-        xs = x[f:]
-        if use_blas:  # y = U^{-T} x_J
-            _tpsv(dtpsv, chars, ints, 1, lx[base:], xs)
-        else:
-            for c in range(nc):
-                value = x[f + c]
-                row = base + c * (c + 1) // 2
-                for d in range(c):
-                    value -= lx[row + d] * x[f + d]
-                x[f + c] = value / lx[row + c]
-        if m == 0:
-            continue
-        if use_blas:  # work = L21 y
-            _gemv(dgemv, chars, ints, scalars, 2, 0, 1, lx[below:], xs, work)
-        else:
-            work[:m] = 0.0
-            for c in range(nc):
-                yc = x[f + c]
-                col = below + c * m
-                for t in range(m):
-                    work[t] += lx[col + t] * yc
-        for t in range(m):
-            x[rowind[r0 + t]] -= work[t]
-    for s in range(ns - 1, -1, -1):  # backward: L^T x = y
-        f, nc, r0, m, base, below = _panel(first, rowptr, lptr, s, ints)
-        use_blas = nc >= _BLAS_SOLVE_COLUMNS
-        xs = x[f:]
-        if m > 0:
-            for t in range(m):
-                work[t] = x[rowind[r0 + t]]
-            if use_blas:  # x_J -= L21^T work
-                _gemv(dgemv, chars, ints, scalars, 1, 2, 0, lx[below:], work, xs)
-            else:
-                for c in range(nc):
-                    col = below + c * m
-                    value = 0.0
-                    for t in range(m):
-                        value += lx[col + t] * work[t]
-                    x[f + c] -= value
-        if use_blas:  # x_J = U^{-1} x_J
-            _tpsv(dtpsv, chars, ints, 2, lx[base:], xs)
-        else:
-            for c in range(nc - 1, -1, -1):  # by rows of L: contiguous in the triangle
-                row = base + c * (c + 1) // 2
-                value = x[f + c] / lx[row + c]
-                x[f + c] = value
-                for d in range(c):
-                    x[f + d] -= lx[row + d] * value
 
 
 def check_square_finite(A: sp.spmatrix) -> sp.csr_matrix:
@@ -513,6 +429,15 @@ class SupernodalCholesky:
     """
 
     def __init__(self, A: sp.spmatrix, perm: np.ndarray | None = None):
+        info = self._factor(A, perm, np.empty(0))
+        if info:
+            raise ValueError(
+                f"the matrix is not positive definite (zero or negative pivot at column "
+                f"{int(self.perm[info - 1])})"
+            )
+
+    def _factor(self, A, perm, signs):
+        """Analyse and factor ``A`` (``signs``: see :func:`_numeric`); returns ``info``."""
         A = check_square_finite(A)
         n = A.shape[0]
         if perm is None:
@@ -522,6 +447,7 @@ class SupernodalCholesky:
             np.bincount(self.perm, minlength=n), np.ones(n, dtype=np.int64)
         ):
             raise ValueError(f"perm must be a permutation of range({n})")
+        self.shape = (n, n)
         B = A[self.perm][:, self.perm].tocsr()
         B.sum_duplicates()
         parent = _etree(n, B.indptr.astype(np.int64), B.indices.astype(np.int64))
@@ -551,13 +477,9 @@ class SupernodalCholesky:
                 child_ptr,
                 child,
                 (_dpotrf, _dtrsm, _dsyrk),
+                signs,
             )
-        if info:
-            raise ValueError(
-                f"the matrix is not positive definite (zero or negative pivot at column "
-                f"{int(self.perm[info - 1])})"
-            )
-        self.shape = (n, n)
+        return info
 
     @property
     def nnz(self) -> int:
@@ -571,7 +493,7 @@ class SupernodalCholesky:
             raise ValueError(f"right-hand side must have shape ({self.shape[0]},), got {b.shape}")
         x = b[self.perm]
         with one_blas_thread():
-            _solve(
+            solve_panels(
                 x,
                 self.first,
                 self.rowptr,
@@ -579,8 +501,21 @@ class SupernodalCholesky:
                 self.lptr,
                 self.lx,
                 np.empty(len(x)),
-                (_dtpsv, _dgemv),
+                BLAS,
             )
         out = np.empty_like(x)
         out[self.perm] = x
         return out
+
+
+def negative_eigenvalues(A: sp.spmatrix, perm: np.ndarray | None = None) -> int:
+    """The number of negative eigenvalues of a sparse symmetric ``A``, nonsingular (both
+    triangles stored), by Sylvester's law of inertia: the negative pivots of its
+    factorization ``C S C^T`` on the fill-reducing order ``perm``, without pivoting, so
+    meant for matrices with few negative eigenvalues (``L - tau M`` with ``tau`` low in
+    the spectrum, between two eigenvalues). A zero pivot is a ``ValueError``."""
+    factor = SupernodalCholesky.__new__(SupernodalCholesky)
+    signs = np.ones(A.shape[0])
+    if factor._factor(A, perm, signs):
+        raise ValueError("zero pivot: the matrix is singular or nearly so")
+    return int(np.count_nonzero(signs < 0.0))

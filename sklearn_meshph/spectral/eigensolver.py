@@ -1,10 +1,14 @@
 """Low eigenpairs of a Laplacian: shift-invert Lanczos on one factorization, or a dense
 solve of small operators.
 
-Eigenpairs come from ARPACK (:func:`scipy.sparse.linalg.eigsh`) in shift-invert mode
-with a small negative shift, so that ``L - sigma M`` is positive definite and factored
-once (:mod:`.factorization`), to a tolerance far below what any signature resolves, and
-again to machine precision when the spectrum has repeated eigenvalues. Small operators
+Eigenpairs come from a Lanczos run in shift-invert mode (:mod:`.lanczos`) with a small
+negative shift, so that ``L - sigma M`` is positive definite and factored once
+(:mod:`.factorization`), to a tolerance far below what any signature resolves. One more
+eigenpair than asked places a shift ``tau`` between the last one and the next, and the
+number of eigenvalues below ``tau`` (the inertia of ``L - tau M``) must equal the count
+found: otherwise (a copy of a repeated eigenvalue missed, as a single Krylov sequence
+does on symmetric shapes) ARPACK (:func:`scipy.sparse.linalg.eigsh`) solves again to
+machine precision with a basis of twice the eigenpairs, which finds every copy. Small operators
 (below a few hundred vertices or nodes: :data:`DENSE_MAX_VERTICES`,
 :data:`DENSE_MAX_NODES`), requests of nearly every eigenpair and ``solver="dense"`` go
 to LAPACK's dense symmetric eigensolver instead (:func:`dense_eigenpairs`). Both give
@@ -27,7 +31,9 @@ from .._threads import one_blas_thread
 from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
+from ._cholesky import SupernodalCholesky, negative_eigenvalues
 from .factorization import SOLVERS, ShiftInvertOperator
+from .lanczos import shift_invert_lanczos
 from .laplacians import LAPLACIANS
 
 __all__ = [
@@ -57,18 +63,21 @@ DENSE_LIMIT = 12_000
 _DENSE_FALLBACK_VERTICES = 3000
 # Shift of shift-invert, relative to the typical eigenvalue scale trace(L)/trace(M)/n.
 _RELATIVE_SHIFT = 1e-2
-# ARPACK stops when every Ritz pair's residual is below this share of its Ritz value,
-# with a Krylov basis of _BASIS_RATIO times the eigenpairs asked for (at least
-# _MIN_BASIS vectors): the eigenpairs then agree to rounding with a solve to machine
-# precision (tol=0, a basis of twice the eigenpairs), which costs more restarts and a
-# larger basis to orthogonalize against (measured in docs/scale.md).
+# The Lanczos run stops when every Ritz pair's residual is below this share of its Ritz
+# value (ARPACK's criterion): the eigenpairs then agree to rounding with ARPACK's to
+# machine precision (measured in docs/scale.md), in at most _MAX_STEPS_RATIO times the
+# eigenpairs solves (about 2.4 times are needed) before ARPACK takes over.
 _TOLERANCE = 1e-8
-_BASIS_RATIO = 1.6
+_MAX_STEPS_RATIO = 4
 _MIN_BASIS = 20
-# A single-vector Lanczos sees the copies of a repeated eigenvalue only as rounding
-# brings them in, late: when two computed eigenvalues agree within this (relative), the
-# spectrum may be symmetric, and it is solved again to machine precision.
-_REPEATED_RTOL = 1e-6
+# Whether the Lanczos run (with its inertia check) comes first, on our Cholesky factor
+# (the "superlu" backend, a check, always goes to ARPACK); False: ARPACK alone, at
+# machine precision, as before (benchmarks/bench_default_cost.py compares the two).
+_LANCZOS = True
+# tau is placed halfway between the last eigenvalue asked for and the next one; when
+# they agree within this (relative), the boundary cuts through a repeated eigenvalue and
+# ARPACK solves again.
+_BOUNDARY_RTOL = 1e-6
 
 
 def eigen_shift(L: sp.spmatrix, M: sp.spmatrix) -> float:
@@ -132,24 +141,39 @@ def dense_eigenpairs(
     return values, vectors * inverse_root[:, None]
 
 
-def _has_repeats(values: np.ndarray) -> bool:
-    """Whether two of the ascending ``values`` agree within :data:`_REPEATED_RTOL`
-    (relative to the largest for zeros)."""
-    gaps = np.diff(values)
-    return bool(np.any(gaps <= _REPEATED_RTOL * np.maximum(values[1:], values[-1] * 1e-9)))
+def _lanczos(L, M, sigma, op, v0, n_eigenpairs):
+    """The Lanczos run's eigenpairs, ascending, checked by the inertia of ``L - tau M``,
+    or ``(None, None)`` when it does not converge or the check fails."""
+    mass = M.diagonal()
+    found = shift_invert_lanczos(
+        op.factor,
+        mass,
+        n_eigenpairs,
+        v0=v0,
+        tol=_TOLERANCE,
+        max_steps=max(_MAX_STEPS_RATIO * (n_eigenpairs + 1), _MIN_BASIS),
+    )
+    if found is None:
+        return None, None
+    theta, vectors = found
+    values = sigma + 1.0 / theta
+    last, following = values[-2], values[-1]
+    if not following - last > _BOUNDARY_RTOL * abs(following):
+        return None, None
+    try:
+        below = negative_eigenvalues(L - 0.5 * (last + following) * M, op.factor.perm)
+    except ValueError:  # a zero pivot: tau on an eigenvalue
+        return None, None
+    if below != n_eigenpairs:
+        return None, None
+    return values[:-1], vectors.T
 
 
-def _shift_invert(L, M, sigma, op, v0, n_eigenpairs, *, fast):
-    """ARPACK's eigenpairs in shift-invert mode, ascending, or ``(None, None)`` when it
-    fails on an operator small enough for the dense solver. ``fast``: the tolerance
-    :data:`_TOLERANCE` and a basis of :data:`_BASIS_RATIO` times the eigenpairs;
-    otherwise machine precision and twice the eigenpairs."""
+def _shift_invert(L, M, sigma, op, v0, n_eigenpairs):
+    """ARPACK's eigenpairs in shift-invert mode to machine precision, ascending, or
+    ``(None, None)`` when it fails on an operator small enough for the dense solver."""
     n = L.shape[0]
-    if fast:
-        ncv, tol = max(int(_BASIS_RATIO * n_eigenpairs) + 1, _MIN_BASIS), _TOLERANCE
-    else:
-        ncv, tol = max(2 * n_eigenpairs + 1, _MIN_BASIS), 0.0
-    ncv = min(n, ncv)
+    ncv, tol = min(n, max(2 * n_eigenpairs + 1, _MIN_BASIS)), 0.0
     # An eigenvalue of a multiplicity beyond the block (many triangles on one edge) can
     # stall ARPACK: no convergence, or error 3 ("no shifts could be applied"). A larger
     # Krylov space resolves it; failing that, a small mesh is solved densely.
@@ -191,7 +215,7 @@ def generalized_eigenpairs(
     """The ``n_eigenpairs`` smallest eigenpairs of ``L phi = lambda M phi``.
 
     Eigenvectors are M-orthonormal (``phi^T M phi = 1``) with signs fixed by
-    :func:`fix_signs`; eigenvalues are ascending. ARPACK's start vector is drawn from
+    :func:`fix_signs`; eigenvalues are ascending. The start vector is drawn from
     ``numpy.random.default_rng(seed)``, so results are bitwise reproducible.
     ``points`` (vertex coordinates) give the factorization's fill-reducing order and
     ``solver`` its backend (:data:`.factorization.SOLVERS`); operators of at most
@@ -210,9 +234,10 @@ def generalized_eigenpairs(
         if solver != "dense" and n > dense_max and n_eigenpairs < n - 1 and sigma < 0:
             op = ShiftInvertOperator(L - sigma * M, points=points, solver=solver)
             v0 = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-            values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs, fast=True)
-            if values is not None and _has_repeats(values):
-                values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs, fast=False)
+            if _LANCZOS and isinstance(op.factor, SupernodalCholesky):
+                values, vectors = _lanczos(L, M, sigma, op, v0, n_eigenpairs)
+            if values is None:
+                values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs)
         if values is None:
             values, vectors = dense_eigenpairs(L, mass, n_eigenpairs)
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
