@@ -25,12 +25,11 @@ def test_row_costs_are_the_sums_of_the_pair_costs(degree):
     np.testing.assert_allclose(pairwise._row_costs(left, right, 1, degree), expected)
 
 
-@pytest.mark.parametrize("symmetric", [True, False])
-def test_blocks_cover_every_row_once_with_equal_costs(symmetric, monkeypatch):
-    monkeypatch.setattr(pairwise, "_MAX_TASK_PAIRS", 2_000)
-    n, m = 300, 200
-    sizes = rng.integers(0, 60, (n, 1)) ** 2 // 60  # a few samples much larger
-    request = pairwise.PairRequest(
+def request(symmetric, n=300, m=200):
+    """A matrix of ``n`` rows (of ``m`` columns unless symmetric) whose samples' sizes
+    vary much (a few samples much larger)."""
+    sizes = rng.integers(0, 60, (n, 1)) ** 2 // 60
+    return pairwise.PairRequest(
         None,
         None,
         None if symmetric else (),
@@ -38,14 +37,33 @@ def test_blocks_cover_every_row_once_with_equal_costs(symmetric, monkeypatch):
         n if symmetric else m,
         sizes=(sizes, None if symmetric else rng.integers(0, 60, (m, 1))),
     )
-    target = request.row_costs.sum() / 16
-    blocks = request.blocks(target)
-    starts, stops, costs = map(np.array, zip(*blocks, strict=True))
-    assert starts[0] == 0
-    assert request.row_pairs[stops[-1] :].sum() == 0  # rows left out have no pair
-    np.testing.assert_array_equal(starts[1:], stops[:-1])
-    pairs = [request.row_pairs[a:b].sum() for a, b in zip(starts, stops, strict=True)]
-    assert max(pairs) <= 2_000
-    np.testing.assert_allclose(costs.sum(), request.row_costs.sum())
-    # Blocks cut by cost, not by pairs: none is much over the target (a row at most).
-    assert costs.max() <= target + request.row_costs.max()
+
+
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_guided_blocks_cover_every_row_once_largest_first(symmetric, monkeypatch):
+    monkeypatch.setattr(pairwise, "_MAX_TASK_PAIRS", 2_000)
+    monkeypatch.setattr(pairwise, "_MIN_TASK_COST", 0.0)
+    matrices = [request(symmetric), request(symmetric, n=50)]
+    tasks = pairwise._guided_blocks(matrices, workers=2)
+    for matrix in matrices:
+        own = sorted((a, b) for r, a, b, _ in tasks if r is matrix)
+        starts, stops = map(np.array, zip(*own, strict=True))
+        assert starts[0] == 0
+        assert stops[-1] == matrix.n
+        np.testing.assert_array_equal(starts[1:], stops[:-1])
+        assert max(matrix.row_pairs[a:b].sum() for a, b in own) <= 2_000
+    costs = np.array([cost for *_, cost in tasks])
+    total = sum(matrix.cost for matrix in matrices)
+    np.testing.assert_allclose(costs.sum(), total)
+    assert np.all(np.diff(costs) <= 0)  # costliest first
+    # Guided sizes: the first block about an eighth of the work (a row more at most),
+    # the last ones far smaller.
+    largest_row = max(matrix.row_costs.max() for matrix in matrices)
+    assert costs[0] <= total / 8 + largest_row
+    assert costs[-1] < costs[0] / 10
+
+
+def test_one_worker_computes_each_matrix_in_one_block():
+    matrices = [request(True), request(False, n=40)]
+    tasks = pairwise._guided_blocks(matrices, workers=1)
+    assert [(a, b) for _, a, b, _ in tasks] == [(0, 300), (0, 40)]

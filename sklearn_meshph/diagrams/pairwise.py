@@ -45,9 +45,10 @@ def as_packed(samples) -> Packed:
 
 # Pairs per task at most: bounds the index arrays and results in flight (about 24 MB).
 _MAX_TASK_PAIRS = 1_000_000
-# Blocks per worker in one parallel call: the costliest go first and the last ones are
-# small, so every worker stays busy to the end of the call.
-_BLOCKS_PER_WORKER = 16
+# Guided blocks: each block costs about the work not yet cut over this many times the
+# workers, so the first blocks are large and the last ones small, and a call ends
+# without a worker waiting long for another's block.
+_GUIDED = 4
 # The estimated cost of a pair of diagrams of a and b points is
 # ``_PAIR_COST + (a + b) ** degree``: degree 2 for the optimal matchings (bottleneck,
 # Wasserstein), 1 for the sliced Wasserstein distance. Only the blocks' boundaries and
@@ -55,17 +56,7 @@ _BLOCKS_PER_WORKER = 16
 _PAIR_COST = 80.0
 # A block costs at least about this many pairs of small diagrams (some milliseconds of
 # work): below, sending the task would cost more than computing it.
-_MIN_TASK_COST = 5_000 * _PAIR_COST
-
-
-def _row_blocks(n_rows, weights, n_tasks):
-    """Boundaries of consecutive row blocks holding about equal sums of ``weights``
-    (one per row: its pairs, or their estimated cost)."""
-    cumulative = np.concatenate([[0], np.cumsum(weights)])
-    targets = np.linspace(0, cumulative[-1], n_tasks + 1)
-    bounds = np.unique(np.searchsorted(cumulative, targets, side="left"))
-    bounds[0], bounds[-1] = 0, n_rows
-    return np.unique(bounds)
+_MIN_TASK_COST = 10_000 * _PAIR_COST
 
 
 def sample_sizes(packed: Packed) -> np.ndarray:
@@ -111,29 +102,11 @@ class PairRequest:
         if sizes is None:
             sizes = (np.zeros((n, 1)), None if self.symmetric else np.zeros((m, 1)))
         self.row_costs = _row_costs(*sizes, self.first, degree)
+        self.cost = float(self.row_costs.sum())
         if self.symmetric:
             self.row_pairs = np.arange(n - self.first, -self.first, -1)
         else:
             self.row_pairs = np.full(n, m)
-
-    def blocks(self, target_cost):
-        """``(start, stop, estimated cost)`` of consecutive row blocks of about
-        ``target_cost`` each (one block for all rows if ``target_cost`` is None), none
-        of more than ``_MAX_TASK_PAIRS`` pairs."""
-        total = float(self.row_costs.sum())
-        n_blocks = 1 if target_cost is None or total == 0 else -(-total // target_cost)
-        n_blocks = max(int(n_blocks), -(-int(self.row_pairs.sum()) // _MAX_TASK_PAIRS))
-        bounds = _row_blocks(self.n, self.row_costs, min(self.n, n_blocks))
-        out = []
-        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
-            # Rows of costly samples may gather more pairs than a task should hold.
-            pieces = -(-int(self.row_pairs[a:b].sum()) // _MAX_TASK_PAIRS)
-            cuts = a + _row_blocks(b - a, self.row_pairs[a:b], max(1, pieces))
-            out += [
-                (c, d, float(self.row_costs[c:d].sum()))
-                for c, d in zip(cuts[:-1], cuts[1:], strict=True)
-            ]
-        return out
 
     def write(self, a, b, values):
         """Store the values of the block of rows ``a:b``."""
@@ -174,6 +147,32 @@ def _row_costs(left_sizes, right_sizes, first, degree):
         if k == 0:
             total = total + _PAIR_COST * sums
     return total.sum(axis=1)
+
+
+def _guided_blocks(requests, workers):
+    """``(request, start, stop, estimated cost)`` of consecutive blocks of rows of every
+    request, the costliest first: each of about the cost not yet cut over ``_GUIDED *
+    workers`` (none much under ``_MIN_TASK_COST``, a remainder under half a block
+    joined to the block before), every request in one block with one worker; at most
+    ``_MAX_TASK_PAIRS`` pairs each, or one row."""
+    remaining = sum(r.cost for r in requests)
+    tasks = []
+    for r in sorted(requests, key=lambda r: -r.cost):
+        cost = np.concatenate([[0.0], np.cumsum(r.row_costs)])
+        pairs = np.concatenate([[0], np.cumsum(r.row_pairs)])
+        a = 0
+        while a < r.n:
+            size = np.inf if workers == 1 else max(remaining / (_GUIDED * workers), _MIN_TASK_COST)
+            b = min(int(np.searchsorted(cost, cost[a] + size)), r.n)
+            if cost[-1] - cost[b] < size / 2:
+                b = r.n
+            fits = int(np.searchsorted(pairs, pairs[a] + _MAX_TASK_PAIRS, side="right")) - 1
+            b = max(a + 1, min(b, fits))
+            tasks.append((r, a, b, cost[b] - cost[a]))
+            remaining -= cost[b] - cost[a]
+            a = b
+    tasks.sort(key=lambda task: -task[3])  # stable: ties keep their order
+    return tasks
 
 
 class _Shared:
@@ -431,20 +430,18 @@ def pair_matrices(requests, *, n_jobs=None, verbose=0, desc="distances") -> list
     """The matrices of several :class:`PairRequest`, over blocks of rows, all in one
     parallel call.
 
-    Every matrix is cut into consecutive row blocks of about equal estimated cost,
-    ``_BLOCKS_PER_WORKER`` per worker for the whole call (a cheap matrix is one block;
-    none much cheaper than ``_MIN_TASK_COST``), of at most a million pairs each; the
-    blocks go costliest first, so the call ends on small ones and no worker waits long
-    for another's block. The samples the blocks read are sent to every worker of a dask
-    cluster once per call. With one worker (``n_jobs=1``, under any backend) the blocks
-    run here, one after the other. Each value is computed alone, so the matrices do not
-    depend on the blocks: neither on ``n_jobs`` nor on the backend.
+    Every matrix is cut into consecutive row blocks by estimated cost, in guided
+    sizes: each block about the work not yet cut over ``_GUIDED`` times the workers
+    (a cheap matrix is one block; none much cheaper than ``_MIN_TASK_COST``), of at
+    most a million pairs each; the blocks go costliest first, so the call ends on
+    small ones and no worker waits long for another's. The samples the blocks read are
+    sent to every worker of a dask cluster once per call. With one worker
+    (``n_jobs=1``, under any backend) the blocks run here, one after the other. Each
+    value is computed alone, so the matrices do not depend on the blocks: neither on
+    ``n_jobs`` nor on the backend.
     """
     workers = effective_n_jobs(n_jobs)
-    total = sum(float(r.row_costs.sum()) for r in requests)
-    target = None if workers == 1 else max(total / (_BLOCKS_PER_WORKER * workers), _MIN_TASK_COST)
-    tasks = [(r, a, b, cost) for r in requests for a, b, cost in r.blocks(target)]
-    tasks.sort(key=lambda task: -task[3])  # stable: ties keep the requests' order
+    tasks = _guided_blocks(requests, workers)
     sides = {}
     for r in requests:
         sides[id(r)] = (_Shared(r.left), None if r.symmetric else _Shared(r.right))
