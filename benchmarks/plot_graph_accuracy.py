@@ -19,7 +19,7 @@ def read(log):
     with open(log) as lines:
         for line in lines:
             parts = line.split()
-            if len(parts) == 8 and parts[3] == "±":
+            if len(parts) >= 8 and parts[3] == "±":
                 rows.append((parts[0], float(parts[2]), float(parts[4]), float(parts[5])))
     if not rows:
         raise SystemExit(f"{log}: no table rows of graph_classification.py")

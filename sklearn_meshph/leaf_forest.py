@@ -1,0 +1,195 @@
+"""Extremely randomized trees whose leaf size is chosen inside the training data, by
+out-of-bag accuracy: the graph classifier's last step (a choice made per fit, so a
+cross-validation around it stays nested)."""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Integral
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.ensemble import ExtraTreesClassifier
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from ._param_validation import Interval, Options, check_params
+
+__all__ = ["LeafSizeForest"]
+
+
+class _LeafSizes:
+    """A non-empty tuple or list of distinct leaf sizes, each an int of at least 1."""
+
+    def __call__(self, value) -> bool:
+        if not isinstance(value, tuple | list) or not value:
+            return False
+        sizes = [v for v in value if isinstance(v, Integral) and not isinstance(v, bool)]
+        return len(sizes) == len(value) and min(sizes) >= 1 and len(set(sizes)) == len(sizes)
+
+    def __str__(self) -> str:
+        return "a non-empty tuple of distinct ints of at least 1"
+
+
+def _oob_accuracy(forest, y) -> float:
+    """Accuracy of the out-of-bag votes over the samples some tree left out."""
+    votes = forest.oob_decision_function_
+    voted = votes.sum(axis=1) > 0
+    if not voted.any():
+        return 0.0
+    predicted = forest.classes_[np.argmax(votes[voted], axis=1)]
+    return float(np.mean(predicted == y[voted]))
+
+
+class LeafSizeForest(ClassifierMixin, BaseEstimator):
+    """Extremely randomized trees, with the leaf size their out-of-bag votes prefer.
+
+    ``fit`` grows one forest of ``n_estimators`` bootstrapped extremely randomized
+    trees per candidate ``min_samples_leaf`` and keeps the one whose out-of-bag
+    accuracy (each training sample voted on by the trees that did not draw it) is
+    highest; ties go to the earlier candidate. The choice uses the training samples
+    only, so a cross-validation around the forest is nested; it needs no held-out
+    folds, and costs one forest per candidate. Small leaves suit data with
+    near-duplicate samples of the same class; larger leaves average noisy labels.
+
+    Parameters
+    ----------
+    n_estimators : int, default=300
+        Trees of each candidate forest.
+    min_samples_leaf : tuple of int, default=(1, 5)
+        Candidate leaf sizes (distinct, each at least 1).
+    max_features : {"sqrt", "log2"}, int, float or None, default="sqrt"
+        Features drawn at each split (as ``ExtraTreesClassifier``'s).
+    n_jobs : int, default=None
+        Parallel jobs of each forest (joblib); the result does not depend on it (the
+        probabilities up to rounding).
+    random_state : int, RandomState or None, default=None
+        Seed of every candidate forest (the same bootstrap draws for each).
+
+    Attributes
+    ----------
+    forest_ : ExtraTreesClassifier
+        The chosen forest.
+    min_samples_leaf_ : int
+        Its leaf size.
+    oob_scores_ : ndarray of shape (n_candidates,)
+        The out-of-bag accuracy of each candidate, in ``min_samples_leaf`` order.
+    classes_ : ndarray
+    n_features_in_ : int
+
+    See Also
+    --------
+    sklearn_meshph.make_graph_classifier : The graph pipeline it ends.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_meshph.leaf_forest import LeafSizeForest
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.normal(size=(60, 3))
+    >>> y = (X[:, 0] > 0).astype(int)
+    >>> forest = LeafSizeForest(n_estimators=50, random_state=0).fit(X, y)
+    >>> forest.min_samples_leaf_ in (1, 5)
+    True
+    """
+
+    _parameter_constraints: dict = {
+        "n_estimators": [Interval(Integral, 1, None, closed="left")],
+        "min_samples_leaf": [_LeafSizes()],
+        "max_features": [
+            Interval(Integral, 1, None, closed="left"),
+            Interval(float, 0.0, 1.0, closed="right"),
+            Options(("sqrt", "log2")),
+            None,
+        ],
+        "n_jobs": [Integral, None],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(
+        self,
+        n_estimators=300,
+        min_samples_leaf=(1, 5),
+        max_features="sqrt",
+        n_jobs=None,
+        random_state=None,
+    ):
+        self.n_estimators = n_estimators
+        self.min_samples_leaf = min_samples_leaf
+        self.max_features = max_features
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
+    def fit(self, X, y):
+        """Grow a forest per candidate leaf size; keep the best out of bag.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features)
+        y : array-like of shape (n_samples,)
+
+        Returns
+        -------
+        self
+        """
+        check_params(self._parameter_constraints, self.get_params(), type(self).__name__)
+        X, y = validate_data(self, X, y)
+        seed = self.random_state
+        if isinstance(seed, np.random.RandomState):
+            seed = seed.randint(2**31)  # the same draws for every candidate
+        forests, scores = [], []
+        for leaf in self.min_samples_leaf:
+            forest = ExtraTreesClassifier(
+                self.n_estimators,
+                min_samples_leaf=leaf,
+                max_features=self.max_features,
+                bootstrap=True,
+                oob_score=True,
+                n_jobs=self.n_jobs,
+                random_state=seed,
+            )
+            with warnings.catch_warnings():
+                # Too few trees leave some samples without an out-of-bag vote: they are
+                # left out of the accuracy (_oob_accuracy), not counted as wrong.
+                warnings.filterwarnings("ignore", "Some inputs do not have OOB scores")
+                forests.append(forest.fit(X, y))
+            scores.append(_oob_accuracy(forest, y))
+        best = int(np.argmax(scores))
+        self.forest_ = forests[best]
+        self.min_samples_leaf_ = int(self.min_samples_leaf[best])
+        self.oob_scores_ = np.array(scores)
+        self.classes_ = self.forest_.classes_
+        return self
+
+    def predict_proba(self, X):
+        """Class probabilities of the chosen forest.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features)
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_classes)
+        """
+        check_is_fitted(self, "forest_")
+        X = validate_data(self, X, reset=False)
+        return self.forest_.predict_proba(X)
+
+    def predict(self, X):
+        """Classes of the chosen forest.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features)
+
+        Returns
+        -------
+        ndarray of shape (n_samples,)
+        """
+        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+
+    @property
+    def feature_importances_(self):
+        """Impurity-based importances of the chosen forest's features."""
+        check_is_fitted(self, "forest_")
+        return self.forest_.feature_importances_
