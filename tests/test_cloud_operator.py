@@ -76,7 +76,7 @@ def test_sheets_a_spacing_or_two_apart_keep_their_area(gap):
     # strip's area at these gaps, 0.95 at 4 spacings); the strip's sides lose a little.
     points, length, width = hairpin(1500, gap=gap)
     _, M = point_cloud_laplacian(points)
-    assert M.diagonal().sum() == pytest.approx(length * width, rel=0.08)
+    assert M.diagonal().sum() == pytest.approx(length * width, rel=0.12)
 
 
 def test_normals_are_oriented_along_the_surface():

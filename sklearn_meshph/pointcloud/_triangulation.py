@@ -262,16 +262,22 @@ def _quadric(coords, height, usable, unit):
 
 def _on_sheet(relative, normal, basis, kept, unit):
     """Which ``kept`` neighbours lie within :data:`SHEET_OFFSET` times ``unit`` of the
-    quadric fitted to the kept ones on the point's sheet (fitted twice: the second time
-    without those off the first). A parallel sheet a spacing or two away is low for its
-    distance (the slope test keeps it) but off the point's own sheet by that much."""
+    quadric fitted to the kept ones on the point's sheet (or 4 times their median offset
+    if more: noise). Fitted twice, the second time without those off the first.
+    A parallel sheet a spacing or two away is low for its distance (the slope test
+    keeps it) but off the point's own sheet by that much."""
     coords = np.matmul(relative, basis)
     height = _along(relative, normal)
     on_sheet = kept
+    rows = np.arange(len(kept))
     for _ in range(2):
         terms, coefficients = _quadric(coords, height, on_sheet, unit)
         off = np.abs(height / unit - _along(terms, coefficients))
-        on_sheet = kept & (off <= SHEET_OFFSET)
+        # Noise spreads the point's own sheet around the quadric: the limit grows with
+        # the median offset of the kept (4 times: 2.7 standard deviations of a normal).
+        ranked = np.sort(np.where(on_sheet, off, np.inf), axis=1)
+        median = ranked[rows, np.maximum(on_sheet.sum(axis=1) - 1, 0) // 2][:, None]
+        on_sheet = kept & (off <= np.maximum(SHEET_OFFSET, 4.0 * median))
     return on_sheet
 
 
