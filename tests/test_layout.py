@@ -27,7 +27,7 @@ LAYERS = (
     ("persistence",),
     ("diagrams",),
     ("vectorization",),
-    ("combine",),
+    ("combine", "leaf_forest"),
     ("pipelines", "datasets", "plotting", "retrieval"),
     ("_report", "_cli_args", "_cli_messages", "cli", "__main__"),
 )
