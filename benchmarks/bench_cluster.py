@@ -1,33 +1,39 @@
 """The default pipeline's two costly stages on a dask.distributed cluster.
 
     python benchmarks/bench_cluster.py [--per-class 5] [--copies 10] [--json FILE]
+    python benchmarks/bench_cluster.py --distances-only [--memory DIR]
     python benchmarks/bench_cluster.py --schedule
 
 A ``LocalCluster`` of 2 worker processes against one of 1, through
 ``joblib.parallel_backend("dask")``, on the stages of ``make_mesh_distance()`` that
 hold the time: the eigen stage (one solve per mesh, no cache) on ``--per-class``
 meshes of each ``watertight_dev`` class (10 is all 200), and the distance blocks of the
-default's diagram parts (each kind's 1-Wasserstein matrix) on their diagrams and
+default's diagram parts (each kind's 1-Wasserstein distance: one parallel call of the
+blocks of its five times' matrices) on their diagrams and
 ``--copies - 1`` jittered copies of them (each point moved by up to 5% of its
 persistence), so that the matrices hold enough pairs to share. Each worker runs one
 task at a time, and both clusters show joblib 2 threads: joblib runs everything in
 the calling process when a cluster has a single thread, so the 1-worker cluster has
 two threads and one task slot (a worker resource), and both get the same tasks. The
 2-worker cluster has one thread per worker and no resource: dask never steals a task
-restricted to a resource, and the blocks of a diagram distance all read one scattered
-object, so with a resource they would all stay on the worker that holds it. Beside
+restricted to a resource. Beside
 them, a local run on one core (the reference) and one on two loky workers. Every
 output is checked to be bitwise identical to the reference's.
 
 Reported: wall times and speed-ups (from the 1-worker cluster to the 2-worker one,
 target 1.7); from dask's task stream, each stage's tasks, their compute seconds on the
-workers (the work), the longest task (the least tail a schedule can leave) and the
-workers' busy share of the wall time; the CPU seconds of the calling process (its
-serial share: sending, receiving, assembling). Then the cost of shipping the meshes:
-their pickled bytes, and the seconds of one task per mesh that only receives it, the
-mesh sent with its task or scattered first, against the same tasks without a mesh.
+workers (the work), the longest task (the least tail a schedule can leave), the
+workers' busy share of the wall time (work / (workers x wall)), the tasks each worker
+ran and the longest time a worker sat idle within the stage: measures of the schedule,
+which hold on a busy machine where the wall times do not; the CPU seconds of the
+calling process (its serial share: sending, receiving, assembling). Then the cost of
+shipping the meshes: their pickled bytes, and the seconds of one task per mesh that
+only receives it, the mesh sent with its task or scattered first, against the same
+tasks without a mesh.
 Workers are started and warmed (imports, numba's kernels loaded from its cache) before
-anything is timed; that start-up is reported apart.
+anything is timed; that start-up is reported apart. ``--distances-only`` times the
+distance blocks alone (the reference's eigen stage read from or written to the eigen
+cache ``--memory``).
 
 ``--schedule`` measures instead what the tasks allow, whatever the machine's load:
 the CPU seconds of each task run one at a time in this process (each mesh's solve,
