@@ -3,10 +3,12 @@ eigen transformer.
 
 - :mod:`.laplacians`: ``cotangent_laplacian``, ``graph_laplacian`` and the registries
   ``LAPLACIANS`` and ``GRAPH_LAPLACIANS`` (graph samples);
-- :mod:`.eigensolver`: shift-invert Lanczos, the dense path, sign rule,
+- :mod:`.eigensolver`: shift-invert Lanczos (:mod:`.lanczos`, checked by an inertia
+  count; ARPACK where the check fails), the dense path, sign rule,
   ``laplacian_eigenfunctions``;
 - :mod:`.factorization`: the factorization backends (registry ``SOLVERS``) over
-  :mod:`._cholesky` (our supernodal Cholesky) and SciPy's SuperLU, with the
+  :mod:`._cholesky` (our supernodal Cholesky, its solves in :mod:`._triangular`) and
+  SciPy's SuperLU, with the
   fill-reducing order of :mod:`._ordering`;
 - :mod:`.solve`: one sample's cleaning and eigensolve in the unit box (a graph's: its
   components), the unit of work the cache stores;

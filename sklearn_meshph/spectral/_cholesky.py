@@ -14,7 +14,13 @@ The factorization behind the eigensolver. A sparse symmetric positive definite m
    update matrices of its children, then LAPACK's ``dpotrf``, BLAS ``dtrsm`` and ``dsyrk``
    (scipy's own BLAS, called from compiled code) factor its columns and form its update
    matrix for the parent;
-3. solves: a forward and a backward sweep over the supernodal panels.
+3. solves: a forward and a backward sweep over the supernodal panels
+   (:mod:`._triangular`).
+
+The same numeric phase, without pivoting and with a signed diagonal (``C S C^T``, ``S``
+of +-1), factors a symmetric indefinite matrix with few negative eigenvalues: their
+count, by Sylvester's law of inertia, is :func:`negative_eigenvalues`, which the
+eigensolver uses to check that no eigenvalue below a shift was missed.
 
 Its speed against SuperLU, CHOLMOD and MKL PARDISO is measured by
 ``benchmarks/bench_factorization.py`` and recorded in ``docs/eigenfunctions.md``.
