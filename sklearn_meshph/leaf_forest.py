@@ -44,12 +44,15 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
     """Extremely randomized trees, with the leaf size their out-of-bag votes prefer.
 
     ``fit`` grows one forest of ``n_estimators`` bootstrapped extremely randomized
-    trees per candidate ``min_samples_leaf`` and keeps the one whose out-of-bag
+    trees per candidate ``min_samples_leaf`` and picks the one whose out-of-bag
     accuracy (each training sample voted on by the trees that did not draw it) is
-    highest; ties go to the earlier candidate. The choice uses the training samples
-    only, so a cross-validation around the forest is nested; it needs no held-out
-    folds, and costs one forest per candidate. Small leaves suit data with
-    near-duplicate samples of the same class; larger leaves average noisy labels.
+    highest; ties go to the earlier candidate. With ``bootstrap=False`` (the default)
+    it then grows the forest it keeps at that leaf size on every training sample,
+    without bootstrap; with ``bootstrap=True`` it keeps the bootstrapped one. The
+    choice uses the training samples only, so a cross-validation around the forest is
+    nested; it needs no held-out folds, and costs one forest per candidate (and one
+    more without bootstrap). Small leaves suit data with near-duplicate samples of the
+    same class; larger leaves average noisy labels.
 
     Parameters
     ----------
@@ -59,6 +62,9 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
         Candidate leaf sizes (distinct, each at least 1).
     max_features : {"sqrt", "log2"}, int, float or None, default="sqrt"
         Features drawn at each split (as ``ExtraTreesClassifier``'s).
+    bootstrap : bool, default=False
+        Whether the kept forest is the bootstrapped one that won the choice, rather
+        than one grown again on every training sample.
     n_jobs : int, default=None
         Parallel jobs of each forest (joblib); the result does not depend on it (the
         probabilities up to rounding).
@@ -68,7 +74,7 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
     Attributes
     ----------
     forest_ : ExtraTreesClassifier
-        The chosen forest.
+        The forest kept, at the chosen leaf size.
     min_samples_leaf_ : int
         Its leaf size.
     oob_scores_ : ndarray of shape (n_candidates,)
@@ -95,6 +101,7 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
     _parameter_constraints: dict = {
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [_LeafSizes()],
+        "bootstrap": ["boolean"],
         "max_features": [
             Interval(Integral, 1, None, closed="left"),
             Interval(float, 0.0, 1.0, closed="right"),
@@ -110,12 +117,14 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
         n_estimators=300,
         min_samples_leaf=(1, 5),
         max_features="sqrt",
+        bootstrap=False,
         n_jobs=None,
         random_state=None,
     ):
         self.n_estimators = n_estimators
         self.min_samples_leaf = min_samples_leaf
         self.max_features = max_features
+        self.bootstrap = bootstrap
         self.n_jobs = n_jobs
         self.random_state = random_state
 
@@ -138,15 +147,7 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
             seed = seed.randint(2**31)  # the same draws for every candidate
         forests, scores = [], []
         for leaf in self.min_samples_leaf:
-            forest = ExtraTreesClassifier(
-                self.n_estimators,
-                min_samples_leaf=leaf,
-                max_features=self.max_features,
-                bootstrap=True,
-                oob_score=True,
-                n_jobs=self.n_jobs,
-                random_state=seed,
-            )
+            forest = self._forest(leaf, seed, bootstrap=True)
             with warnings.catch_warnings():
                 # Too few trees leave some samples without an out-of-bag vote: they are
                 # left out of the accuracy (_oob_accuracy), not counted as wrong.
@@ -154,11 +155,25 @@ class LeafSizeForest(ClassifierMixin, BaseEstimator):
                 forests.append(forest.fit(X, y))
             scores.append(_oob_accuracy(forest, y))
         best = int(np.argmax(scores))
-        self.forest_ = forests[best]
         self.min_samples_leaf_ = int(self.min_samples_leaf[best])
+        if self.bootstrap:
+            self.forest_ = forests[best]
+        else:
+            self.forest_ = self._forest(self.min_samples_leaf_, seed, bootstrap=False).fit(X, y)
         self.oob_scores_ = np.array(scores)
         self.classes_ = self.forest_.classes_
         return self
+
+    def _forest(self, leaf, seed, *, bootstrap):
+        return ExtraTreesClassifier(
+            self.n_estimators,
+            min_samples_leaf=leaf,
+            max_features=self.max_features,
+            bootstrap=bootstrap,
+            oob_score=bootstrap,
+            n_jobs=self.n_jobs,
+            random_state=seed,
+        )
 
     def predict_proba(self, X):
         """Class probabilities of the chosen forest.

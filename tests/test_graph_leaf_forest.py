@@ -44,9 +44,12 @@ def test_the_leaf_size_the_out_of_bag_votes_prefer(data, leaf):
     scores = [out_of_bag(X, y, size).oob_score_ for size in (1, 5)]
     np.testing.assert_allclose(forest.oob_scores_, scores)
     assert forest.min_samples_leaf_ == leaf
-    chosen = out_of_bag(X, y, leaf)
-    np.testing.assert_array_equal(forest.predict_proba(X), chosen.predict_proba(X))
-    np.testing.assert_array_equal(forest.feature_importances_, chosen.feature_importances_)
+    # The forest kept is grown again at that leaf size on every sample, no bootstrap.
+    whole = ExtraTreesClassifier(100, min_samples_leaf=leaf, random_state=0).fit(X, y)
+    np.testing.assert_array_equal(forest.predict_proba(X), whole.predict_proba(X))
+    np.testing.assert_array_equal(forest.feature_importances_, whole.feature_importances_)
+    kept = LeafSizeForest(n_estimators=100, bootstrap=True, random_state=0).fit(X, y)
+    np.testing.assert_array_equal(kept.predict_proba(X), out_of_bag(X, y, leaf).predict_proba(X))
 
 
 def test_graph_classifier_chooses_its_leaf_size_per_fit():
@@ -58,6 +61,7 @@ def test_graph_classifier_chooses_its_leaf_size_per_fit():
     assert model.get_params()["classifier__min_samples_leaf"] == (1, 5)
     assert trees.min_samples_leaf_ == (1, 5)[int(np.argmax(trees.oob_scores_))]
     assert all(tree.min_samples_leaf == trees.min_samples_leaf_ for tree in trees.forest_)
+    assert not trees.forest_.bootstrap  # the kept forest sees every training graph
 
 
 def test_few_trees_warn_nothing_and_score_the_voted_samples():
@@ -92,6 +96,7 @@ def test_clone_pickle_and_the_same_result_for_any_n_jobs():
         ({"min_samples_leaf": (1, True)}, "min_samples_leaf"),
         ({"n_estimators": 0}, "n_estimators"),
         ({"max_features": "all"}, "max_features"),
+        ({"bootstrap": "yes"}, "bootstrap"),
     ],
 )
 def test_refuses_bad_parameters_by_name(params, name):
