@@ -12,16 +12,10 @@ triangulated, within 1% once the far arm is left out.
 import numpy as np
 import pytest
 import scipy.linalg
-import scipy.sparse
 
 from sklearn_meshph import point_cloud_laplacian
 from sklearn_meshph.mesh.graph import connected_components
-from sklearn_meshph.pointcloud._triangulation import (
-    LOCAL_NEIGHBORS,
-    nearest,
-    orient_normals,
-    surface_neighbours,
-)
+from sklearn_meshph.pointcloud._triangulation import surface_neighbours
 from sklearn_meshph.pointcloud.graph import surface_graph
 from sklearn_meshph.spectral.eigensolver import generalized_eigenpairs
 
@@ -49,65 +43,16 @@ def two_sheets(n, gap, seed=0):
 
 def low_spectrum(points, k=3):
     L, M = point_cloud_laplacian(points)
-    mass = M.diagonal()
-    kept = mass > 0  # as the eigen stage: a point in no triangle is dropped
-    values, _ = generalized_eigenpairs(
-        L[kept][:, kept], scipy.sparse.diags(mass[kept]), k, points=points[kept]
-    )
-    return values, mass.sum()
+    values, _ = generalized_eigenpairs(L, M, k, points=points)
+    return values, M.diagonal().sum()
 
 
-@pytest.mark.parametrize("gap", [0.06, 0.08])  # arms 3 and 3.9 spacings apart
-def test_a_folded_strip_is_not_short_circuited(gap):
-    # With the arms 3 spacings apart the first eigenvalue was 2.9 times the strip's: the
-    # principal plane of the nearest tilted towards the other arm, which then passed the
-    # slope test; the second is the strip's (the fold is not cut).
-    points, length, width = hairpin(1500, gap=gap)
+def test_a_folded_strip_is_not_short_circuited():
+    points, length, width = hairpin(1500, gap=0.08)  # arms 3.9 spacings apart
     values, area = low_spectrum(points)
     assert area == pytest.approx(length * width, rel=0.1)
-    assert values[1] == pytest.approx((np.pi / length) ** 2, rel=0.08)
+    assert values[1] == pytest.approx((np.pi / length) ** 2, rel=0.05)
     assert values[2] == pytest.approx((2 * np.pi / length) ** 2, rel=0.05)
-
-
-@pytest.mark.parametrize("gap", [0.03, 0.04])  # 1.5 and 2 spacings
-def test_sheets_a_spacing_or_two_apart_keep_their_area(gap):
-    # Too close for the fold between them to be sampled, not for the arms to be told
-    # apart: the other arm's points used to land in the fans (mass 0.84 and 0.85 of the
-    # strip's area at these gaps, 0.95 at 4 spacings); the strip's sides lose a little.
-    points, length, width = hairpin(1500, gap=gap)
-    _, M = point_cloud_laplacian(points)
-    assert M.diagonal().sum() == pytest.approx(length * width, rel=0.12)
-
-
-def test_normals_are_oriented_along_the_surface():
-    # The two arms of a folded strip face opposite ways: that, not the unoriented
-    # normals (parallel), tells the other arm from the point's own.
-    points, _, _ = hairpin(1500, gap=0.08)
-    _, _, normal, _ = surface_neighbours(points)
-    flat = np.abs(points[:, 0]) > 0.2
-    upper = points[:, 2] > 0.04
-    up = np.sign(normal[flat, 2])
-    assert len(set(up[upper[flat]])) == 1 and len(set(up[~upper[flat]])) == 1
-    assert up[upper[flat]][0] == -up[~upper[flat]][0]
-    # the signs orient_normals gives make any normals consistent the same way
-    flipped = normal * np.where(np.arange(len(points)) % 2, -1.0, 1.0)[:, None]
-    sign = orient_normals(points, flipped, nearest(points, 10)[1])
-    agreement = np.sign(((flipped * sign[:, None]) * normal).sum(axis=1))
-    assert len(set(agreement)) == 1
-
-
-def test_a_piece_smaller_than_a_neighbourhood_gets_no_mass():
-    # A few points whose neighbourhoods leave out all the others make an island of the
-    # operator (an extra zero eigenvalue): fewer points than a neighbourhood are no part
-    # of the surface the sampling shows.
-    rng = np.random.default_rng(3)
-    sheet = np.column_stack([rng.random((1500, 2)), np.zeros(1500)])
-    few = LOCAL_NEIGHBORS - 5
-    piece = np.column_stack([0.5 + 0.02 * rng.random((few, 2)), np.full(few, 2.0)])
-    _, M = point_cloud_laplacian(np.vstack([sheet, piece]))
-    mass = M.diagonal()
-    assert (mass[1500:] == 0).all()
-    assert (mass[:1500] > 0).mean() > 0.99
 
 
 def test_a_thin_cylinder_keeps_its_area_and_spectrum():

@@ -81,8 +81,8 @@ def surface_graph(points: np.ndarray) -> np.ndarray:
     operator sums), computed in the unit box and in :func:`canonical_order`, then
     renumbered: the same edges at any scale float64 holds, and a permuted cloud gives
     the permuted edges. A point in no triangle (its neighbours on its own sheet too few
-    or on a line, or its piece fewer than ``LOCAL_NEIGHBORS`` points) has no edge: it
-    is a component of its own, as an unreferenced vertex of a mesh is.
+    or on a line) has no edge: it is a component of its own, as an unreferenced vertex
+    of a mesh is.
     """
     points = np.asarray(points, dtype=np.float64)
     if len(points) < 3:

@@ -52,30 +52,28 @@ def point_cloud_laplacian(
         Symmetric positive semi-definite stiffness, rows summing to zero.
     M : scipy.sparse.dia_matrix of shape (n, n)
         Diagonal lumped mass; its sum estimates the surface's area. A point in no
-        triangle (its neighbours on its own sheet too few or on a line, or its piece
-        of the triangles fewer than ``LOCAL_NEIGHBORS`` points) has zero mass and no
-        stiffness.
+        triangle (its neighbours on its own sheet too few or on a line) has zero mass
+        and no stiffness.
 
     Notes
     -----
     Every point's neighbours on its own sheet of the surface
     (:func:`._triangulation.surface_neighbours`: not across a thin part, not on a part
-    nearby, not on a sheet facing the other way) are projected onto its tangent plane
-    and the Delaunay triangles at the point kept. Each triangle of a point's fan
-    contributes the cotangent stiffness and barycentric mass (as in
-    :func:`cotangent_laplacian`) of its shape on the quadric fitted to the point's
-    neighbourhood (tangent coordinates and fitted heights); the sum over all fans is
-    divided by three, since a triangle on which the neighbourhoods agree is in the fans
-    of its three corners. Neighbourhoods that disagree contribute each of their choices
-    with its share; every triangle's stiffness is positive semi-definite, so the sum is
-    too. Neighbours across a thin part would be folded into the fan by the projection,
-    short-circuiting the surface (a stiffer operator, less area); the fitted heights
-    keep the bend of a thin part and leave out the noise across the surface, which would
-    otherwise add area at the sampling scale. This is the local triangulation of [1]_
-    (section 5.7) with an exact neighbour search, surface neighbourhoods, fitted
-    geometry and without the tufted cover and intrinsic Delaunay flips, which on
-    randomly sampled clouds lower the spectrum (the measurements are in
-    ``docs/point_clouds.md``).
+    nearby) are projected onto its tangent plane and the Delaunay triangles at the
+    point kept. Each triangle of a point's fan contributes the cotangent stiffness and
+    barycentric mass (as in :func:`cotangent_laplacian`) of its shape on the quadric
+    fitted to the point's neighbourhood (tangent coordinates and fitted heights); the
+    sum over all fans is divided by three, since a triangle on which the neighbourhoods
+    agree is in the fans of its three corners. Neighbourhoods that disagree contribute
+    each of their choices with its share; every triangle's stiffness is positive
+    semi-definite, so the sum is too. Neighbours across a thin part would be folded
+    into the fan by the projection, short-circuiting the surface (a stiffer operator,
+    less area); the fitted heights keep the bend of a thin part and leave out the
+    noise across the surface, which would otherwise add area at the sampling scale.
+    This is the local triangulation of [1]_ (section 5.7) with an exact neighbour
+    search, surface neighbourhoods, fitted geometry and without the tufted cover and
+    intrinsic Delaunay flips, which on randomly sampled clouds lower the spectrum (the
+    measurements are in ``docs/point_clouds.md``).
 
     References
     ----------
