@@ -11,6 +11,7 @@ import os
 from numbers import Integral
 
 import numpy as np
+from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.pipeline import FeatureUnion, Pipeline
 from sklearn.preprocessing import FunctionTransformer
 
@@ -54,8 +55,6 @@ _GRAPH_TIMES = (0.1, 10.0)
 _GRAPH_CLASSIFIER_TIMES = (0.1, 1.0, 10.0)
 _GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
 _GRAPH_TREES = 300
-# The forest's candidate leaf sizes, chosen per fit out of bag (docs/graphs.md).
-_GRAPH_LEAVES = (1, 5)
 # Weisfeiler-Lehman iterations of make_graph_classifier's GraphFeatures.
 _GRAPH_WL_ITERATIONS = 3
 
@@ -443,6 +442,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
     {
         "times": [tuple, list],
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
+        "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
         "random_state": ["random_state"],
@@ -453,6 +453,7 @@ def make_graph_classifier(
     *,
     times=_GRAPH_CLASSIFIER_TIMES,
     n_estimators=_GRAPH_TREES,
+    min_samples_leaf=1,
     memory=None,
     n_jobs=None,
     random_state=0,
@@ -473,14 +474,13 @@ def make_graph_classifier(
       degrees, the spectrum's histogram, the signatures' quantiles, histograms of
       the distances between pairs of nodes, and hashed counts of the
       Weisfeiler-Lehman patterns of the degrees);
-    - ``"classifier"``: a :class:`~sklearn_meshph.leaf_forest.LeafSizeForest`,
-      extremely randomized trees (no scaling of these features of very different
-      ranges) whose leaf size, 1 or 5 graphs, is chosen per fit by out-of-bag
-      accuracy on the training graphs.
+    - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
+      features of very different ranges and no tuning (or, given candidate leaf
+      sizes, a :class:`~sklearn_meshph.leaf_forest.LeafSizeForest` choosing one per
+      fit by out-of-bag accuracy on the training graphs).
 
     Edge weights enter the Laplacian only (:class:`GraphFeatures` reads the edges);
-    node labels or attributes are not used. Nothing in it is tuned per dataset (the
-    leaf size is chosen inside each fit, from the training graphs only);
+    node labels or attributes are not used. Nothing in it is tuned per dataset;
     ``docs/graphs.md`` has its accuracy under PersLay's protocol on six TU datasets.
 
     Parameters
@@ -488,7 +488,11 @@ def make_graph_classifier(
     times : tuple of float, default=(0.1, 1.0, 10.0)
         Times of the heat kernel signatures: PersLay's 0.1 and 10, and 1 between them.
     n_estimators : int, default=300
-        Trees of each candidate forest.
+        Trees of the forest (of each candidate forest).
+    min_samples_leaf : int or tuple of int, default=1
+        The forest's leaf size, or candidate sizes chosen per fit out of bag (a
+        :class:`~sklearn_meshph.leaf_forest.LeafSizeForest`; ``docs/graphs.md``
+        compares them).
     memory : str, path, joblib.Memory or None, default=None
         Cache of the eigensolves (see :class:`LaplacianEigenTransformer`).
     n_jobs : int, default=None
@@ -540,7 +544,15 @@ def make_graph_classifier(
     )
     graph = GraphFeatures(wl_iterations=_GRAPH_WL_ITERATIONS)
     features = FeatureUnion([("diagrams", diagrams), ("graph", graph)])
-    trees = LeafSizeForest(
-        n_estimators, min_samples_leaf=_GRAPH_LEAVES, n_jobs=n_jobs, random_state=random_state
-    )
+    if isinstance(min_samples_leaf, tuple | list):
+        trees = LeafSizeForest(
+            n_estimators, tuple(min_samples_leaf), n_jobs=n_jobs, random_state=random_state
+        )
+    else:
+        trees = ExtraTreesClassifier(
+            n_estimators,
+            min_samples_leaf=min_samples_leaf,
+            n_jobs=n_jobs,
+            random_state=random_state,
+        )
     return Pipeline([("eigen", eigen), ("features", features), ("classifier", trees)])

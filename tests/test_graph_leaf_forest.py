@@ -52,16 +52,25 @@ def test_the_leaf_size_the_out_of_bag_votes_prefer(data, leaf):
     np.testing.assert_array_equal(kept.predict_proba(X), out_of_bag(X, y, leaf).predict_proba(X))
 
 
-def test_graph_classifier_chooses_its_leaf_size_per_fit():
-    """make_graph_classifier's trees pick leaves of 1 or 5 graphs inside each fit (the
-    plain forest before always grew leaves of one graph)."""
+def test_graph_classifier_chooses_its_leaf_size_per_fit_when_given_candidates():
+    """make_graph_classifier(min_samples_leaf=(1, 5)) picks leaves of 1 or 5 graphs inside
+    each fit; an int, the default 1, is the plain forest."""
     cycles = [(n, np.array([[i, (i + 1) % n] for i in range(n)])) for n in range(5, 25)]
-    model = make_graph_classifier(n_estimators=30).fit(cycles, np.arange(20) % 2)
+    plain = make_graph_classifier(n_estimators=5)
+    assert isinstance(plain.named_steps["classifier"], ExtraTreesClassifier)
+    assert plain.get_params()["classifier__min_samples_leaf"] == 1
+    model = make_graph_classifier(n_estimators=30, min_samples_leaf=(1, 5))
+    model.fit(cycles, np.arange(20) % 2)
     trees = model.named_steps["classifier"]
     assert model.get_params()["classifier__min_samples_leaf"] == (1, 5)
     assert trees.min_samples_leaf_ == (1, 5)[int(np.argmax(trees.oob_scores_))]
     assert all(tree.min_samples_leaf == trees.min_samples_leaf_ for tree in trees.forest_)
     assert not trees.forest_.bootstrap  # the kept forest sees every training graph
+
+
+def test_graph_classifier_refuses_a_bad_leaf_size():
+    with pytest.raises(ValueError, match="min_samples_leaf"):
+        make_graph_classifier(min_samples_leaf=0)
 
 
 def test_few_trees_warn_nothing_and_score_the_voted_samples():
