@@ -18,17 +18,20 @@ __all__ = ["broadcast", "map_samples", "parallel", "sample_blocks", "track"]
 _BLOCK = 2048
 
 
-def parallel(n_jobs, prefer=None, batch_size="auto") -> Parallel:
+def parallel(n_jobs, prefer=None, batch_size="auto", pre_dispatch="2 * n_jobs") -> Parallel:
     """A joblib ``Parallel`` returning results in order as they finish, where the backend
     can (loky, threading, dask with joblib >= 1.4); others (multiprocessing) return
     them all at once. ``prefer="threads"`` is joblib's soft hint for work that releases
     the GIL (a ``parallel_backend`` context still decides); ``batch_size=1`` sends each
     task alone, for tasks already cut to a few per worker (joblib's automatic batching,
-    learned on the fast tasks of earlier calls, would put several on one worker)."""
+    learned on the fast tasks of earlier calls, would put several on one worker);
+    ``pre_dispatch="all"`` hands every task to the backend at once (for tasks that carry
+    only references, such as futures of a dask cluster)."""
+    options = dict(n_jobs=n_jobs, prefer=prefer, batch_size=batch_size, pre_dispatch=pre_dispatch)
     try:
-        return Parallel(n_jobs=n_jobs, return_as="generator", prefer=prefer, batch_size=batch_size)
+        return Parallel(return_as="generator", **options)
     except ValueError:  # "Backend ... does not support return_as=generator"
-        return Parallel(n_jobs=n_jobs, prefer=prefer, batch_size=batch_size)
+        return Parallel(**options)
 
 
 def broadcast(values: list) -> list:

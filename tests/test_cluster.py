@@ -182,6 +182,26 @@ def test_the_samples_go_to_every_worker_at_once(client, monkeypatch):
     assert kinds == [True]
 
 
+def test_blocks_that_carry_futures_all_go_to_the_scheduler_at_once(client, monkeypatch):
+    """Under dask every block is handed to the scheduler at once (joblib's default of
+    two in flight per worker left workers idle between blocks); locally, the default."""
+    seen = []
+    original = pairwise.parallel
+
+    def recording_parallel(n_jobs, batch_size="auto", pre_dispatch="2 * n_jobs"):
+        seen.append(pre_dispatch)
+        return original(n_jobs, batch_size=batch_size, pre_dispatch=pre_dispatch)
+
+    monkeypatch.setattr(pairwise, "parallel", recording_parallel)
+    X = uneven_samples()
+    with parallel_backend("dask"):
+        on_cluster = DiagramDistance(metric="wasserstein", n_jobs=-1).fit_transform(X)
+    with parallel_backend("threading"):
+        here = DiagramDistance(metric="wasserstein", n_jobs=2).fit_transform(X)
+    assert seen == ["all", "2 * n_jobs"]
+    np.testing.assert_array_equal(on_cluster, here)
+
+
 def test_all_positions_go_in_one_parallel_call_costliest_block_first(monkeypatch):
     """DiagramDistance(normalization="median") and a stack compute a matrix per
     diagram position: all their blocks are dispatched in one call, a block of the
@@ -189,7 +209,7 @@ def test_all_positions_go_in_one_parallel_call_costliest_block_first(monkeypatch
     the cheap ones."""
     dispatched = []  # per parallel call, the (position, start) of its blocks in order
 
-    def recording_parallel(n_jobs, batch_size="auto"):
+    def recording_parallel(n_jobs, batch_size="auto", pre_dispatch="2 * n_jobs"):
         def run(calls):
             dispatched.append([])
             for function, args, kwargs in calls:

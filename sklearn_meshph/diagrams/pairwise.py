@@ -446,13 +446,20 @@ def pair_matrices(requests, *, n_jobs=None, verbose=0, desc="distances") -> list
     for r in requests:
         sides[id(r)] = (_Shared(r.left), None if r.symmetric else _Shared(r.right))
     local = workers == 1 or len(tasks) <= 1
+    scattered = False
     if not local:  # sent once to every worker of a dask cluster, themselves elsewhere
         held = [side for pair in sides.values() for side in pair if side is not None]
-        sent = dict(zip(map(id, held), broadcast(held), strict=True))
+        shipped = broadcast(held)
+        scattered = any(s is not h for s, h in zip(shipped, held, strict=True))
+        sent = dict(zip(map(id, held), shipped, strict=True))
         sides = {k: tuple(sent.get(id(side)) for side in pair) for k, pair in sides.items()}
     run = _block if local else delayed(_block)
     calls = (run(r.function, *sides[id(r)], a, b, r.m, r.first) for r, a, b, _ in tasks)
-    blocks = calls if local else parallel(n_jobs, batch_size=1)(calls)
+    # Tasks that carry only futures all go to the dask scheduler at once, which gives
+    # each to the first worker free: with joblib's two tasks in flight per worker, it
+    # placed them unevenly and the workers waited between them.
+    dispatch = "all" if scattered else "2 * n_jobs"
+    blocks = calls if local else parallel(n_jobs, batch_size=1, pre_dispatch=dispatch)(calls)
     for (r, a, b, _), values in zip(
         tasks, track(blocks, total=len(tasks), desc=desc, verbose=verbose), strict=True
     ):
