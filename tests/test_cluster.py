@@ -27,26 +27,28 @@ from sklearn_meshph import (
 distributed = pytest.importorskip("distributed")
 
 
-@pytest.fixture(scope="module")
-def client():
+def _cluster(n_workers, threads_per_worker, **client_options):
+    """A client of a local cluster of worker processes, closed with the cluster."""
     with (
         distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=n_workers,
+            threads_per_worker=threads_per_worker,
+            processes=True,
+            dashboard_address=None,
         ) as cluster,
-        distributed.Client(cluster) as client,
+        distributed.Client(cluster, **client_options) as client,
     ):
         yield client
+
+
+@pytest.fixture(scope="module")
+def client():
+    yield from _cluster(2, 1)
 
 
 @pytest.fixture(scope="module")
 def one_worker():
-    with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster, set_as_default=False) as client,
-    ):
-        yield client
+    yield from _cluster(1, 2, set_as_default=False)
 
 
 @pytest.fixture(scope="module")
