@@ -11,11 +11,13 @@ import numpy as np
 from scipy.sparse import issparse
 from sklearn.base import BaseEstimator, ClassNamePrefixFeaturesOutMixin, TransformerMixin, clone
 from sklearn.metrics import pairwise_distances
+from sklearn.pipeline import Pipeline
 from sklearn.utils import get_tags
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import median_scale
 from ._param_validation import Interval, Options, check_params
+from .diagrams.pairwise import PairwiseTransformer, fit_transform_plan, run_plans, transform_plan
 
 __all__ = ["CombinedDistance", "FeatureDistance"]
 
@@ -34,6 +36,24 @@ def _reusable(X):
     if hasattr(X, "__len__") and hasattr(X, "__getitem__"):
         return X
     return np.asarray(X) if hasattr(X, "__array__") else list(X)
+
+
+def _part_plan(part, X, fit: bool):
+    """``part.fit_transform(X)`` (``fit``) or ``part.transform(X)`` as a
+    :class:`~sklearn_meshph.diagrams.pairwise.MatrixPlan`: the matrices of a diagram
+    distance, alone or ending a :class:`~sklearn.pipeline.Pipeline` (without memory,
+    verbose or transform_input, whose steps before it run now, fitted in place), are
+    left to the plan; any other part computes its output now."""
+    step = part
+    plain = isinstance(part, Pipeline) and part.memory is None and not part.verbose
+    if plain and getattr(part, "transform_input", None) is None:
+        step = part.steps[-1][1]
+        if not isinstance(step, PairwiseTransformer):
+            step = part
+        elif len(part.steps) > 1:
+            head = part[:-1]  # a Pipeline of the same step objects
+            X = head.fit_transform(X) if fit else head.transform(X)
+    return fit_transform_plan(step, X) if fit else transform_plan(step, X)
 
 
 class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
@@ -351,7 +371,9 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         weights = self._fitted_weights()
         X = _reusable(X)  # every part reads X: a generator is read once
         parts = [(name, clone(part)) for name, part in self.transformer_list]
-        matrices = [part.fit_transform(X) for _, part in parts]
+        # Every part's diagram distances are computed in one parallel call, after the
+        # steps before them: one wait for the last block, not one per part.
+        matrices = run_plans([_part_plan(part, X, fit=True) for _, part in parts])
         self.parts_, self.weights_ = parts, weights
         self.scales_ = {
             name: median_scale(matrix) if self.normalization == "median" else 1.0
@@ -391,7 +413,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         check_is_fitted(self, "parts_")
         X = _reusable(X)
-        return self._combine([part.transform(X) for _, part in self.parts_])
+        return self._combine(run_plans([_part_plan(part, X, fit=False) for _, part in self.parts_]))
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

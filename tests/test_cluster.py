@@ -238,3 +238,39 @@ def test_all_positions_go_in_one_parallel_call_costliest_block_first(monkeypatch
             order = [n_points for n_points, _ in dispatched[0]]
             assert order[0] == sizes[1]
             assert order.count(sizes[1]) > 2 * max(order.count(sizes[0]), 1)
+
+
+def test_the_defaults_diagram_distances_go_in_one_parallel_call(monkeypatch):
+    """make_mesh_distance()'s three diagram parts (one per kind, five positions each)
+    hand their blocks to one parallel call, in fit_transform as in transform (they made
+    one call per kind, each ending in a wait for its last block), a block of every kind
+    among them, costliest first; the output is the local run's."""
+    meshes = make_shapes(n_per_class=2, classes=("blob", "tripod"), random_state=0).data
+    local = make_mesh_distance(n_jobs=1)
+    expected = local.fit_transform(meshes[:3]), local.transform(meshes[3:])
+    calls, broadcasts = [], []  # per parallel call, the estimated cost of each block
+    original, broadcast = pairwise._guided_blocks, pairwise.broadcast
+
+    def recording_blocks(requests, workers):
+        tasks = original(requests, workers)
+        calls.append(([r for r in requests], [cost for *_, cost in tasks]))
+        return tasks
+
+    def recording_broadcast(values):
+        broadcasts.append(len(values))
+        return broadcast(values)
+
+    monkeypatch.setattr(pairwise, "_guided_blocks", recording_blocks)
+    monkeypatch.setattr(pairwise, "broadcast", recording_broadcast)
+    with parallel_backend("threading"):
+        pipeline = make_mesh_distance(n_jobs=2)
+        fitted = pipeline.fit_transform(meshes[:3])
+        assert len(calls) == 1
+        transformed = pipeline.transform(meshes[3:])
+    assert len(calls) == 2
+    assert broadcasts == [15, 15 + 15]  # symmetric: one side per matrix; else two
+    for requests, costs in calls:
+        assert len(requests) == 3 * 5  # kinds x times
+        assert costs == sorted(costs, reverse=True)
+    np.testing.assert_array_equal(fitted, expected[0])
+    np.testing.assert_array_equal(transformed, expected[1])

@@ -67,3 +67,48 @@ def test_one_worker_computes_each_matrix_in_one_block():
     matrices = [request(True), request(False, n=40)]
     tasks = pairwise._guided_blocks(matrices, workers=1)
     assert [(a, b) for _, a, b, _ in tasks] == [(0, 300), (0, 40)]
+
+
+def counting_pair_matrices(monkeypatch):
+    """The requests of each call of pair_matrices, which then computes them."""
+    calls, original = [], pairwise.pair_matrices
+
+    def counting(requests, **kwargs):
+        calls.append((len(requests), kwargs["n_jobs"]))
+        return original(requests, **kwargs)
+
+    monkeypatch.setattr(pairwise, "pair_matrices", counting)
+    return calls
+
+
+def sum_of_pairs(left, right, rows, cols):
+    return left[rows] + right[cols]
+
+
+def plan(n, n_jobs, offset):
+    """A plan of two matrices (a symmetric one, a rectangle) finishing to their sum."""
+    values = np.arange(n, dtype=float) + offset
+    requests = [
+        pairwise.PairRequest(lambda a, b, r, c: a[r] + a[c], values, None, n, n),
+        pairwise.PairRequest(sum_of_pairs, values, values[:3], n, 3),
+    ]
+    return pairwise.MatrixPlan(
+        requests, lambda matrices: (matrices[0], matrices[1]), n_jobs=n_jobs, verbose=0
+    )
+
+
+def test_plans_of_one_n_jobs_run_in_one_call_each_finishing_on_its_own(monkeypatch):
+    calls = counting_pair_matrices(monkeypatch)
+    plans = [plan(5, 1, 0.0), plan(4, 2, 10.0), pairwise.MatrixPlan.ready("done"), plan(6, 1, 20.0)]
+    outputs = pairwise.run_plans(plans)
+    # One call per n_jobs (4 matrices for n_jobs=1), none for the plan already done.
+    assert calls == [(4, 1), (2, 2)]
+    assert outputs[2] == "done"
+    for (square, rectangle), (n, offset) in zip(
+        [outputs[0], outputs[1], outputs[3]], [(5, 0.0), (4, 10.0), (6, 20.0)], strict=True
+    ):
+        values = np.arange(n) + offset
+        expected = values[:, None] + values[None, :]
+        np.fill_diagonal(expected, 0.0)
+        np.testing.assert_array_equal(square, expected)
+        np.testing.assert_array_equal(rectangle, values[:, None] + values[None, :3])

@@ -22,19 +22,24 @@ from .validation import Packed, pack_samples
 
 __all__ = [
     "SLICED",
+    "MatrixPlan",
     "PairRequest",
     "PairwiseTransformer",
     "as_packed",
     "distance_matrices",
     "distance_matrix",
+    "distance_requests",
     "distance_stack",
+    "fit_transform_plan",
     "pack_for_metric",
     "pair_distances",
     "pair_matrices",
     "pair_matrix",
     "pairwise_diagram_distances",
     "precedes",
+    "run_plans",
     "sample_sizes",
+    "transform_plan",
 ]
 
 
@@ -342,6 +347,15 @@ def distance_matrices(
     """The distance matrix of each ``(left, right)`` of ``sides`` (validated samples;
     ``right=None``: the symmetric matrix of ``left``), all in one parallel call
     (:func:`pair_matrices`); ``out``: None or one array per matrix."""
+    requests = distance_requests(sides, metric, order, internal_p, dtype, out, n_directions)
+    return pair_matrices(requests, n_jobs=n_jobs, verbose=verbose)
+
+
+def distance_requests(
+    sides, metric, order, internal_p, dtype, out=None, n_directions=10
+) -> list[PairRequest]:
+    """The :class:`PairRequest` of the distance matrix of each ``(left, right)`` of
+    ``sides``, as :func:`distance_matrices` computes them."""
     code, order = kernel_metric(metric, order, internal_p)
     requests = []
     for k, (left, right) in enumerate(sides):
@@ -367,7 +381,7 @@ def distance_matrices(
                 degree=1 if code == SLICED else 2,
             )
         )
-    return pair_matrices(requests, n_jobs=n_jobs, verbose=verbose)
+    return requests
 
 
 def distance_stack(
@@ -467,6 +481,61 @@ def pair_matrices(requests, *, n_jobs=None, verbose=0, desc="distances") -> list
     return [r.finish() for r in requests]
 
 
+class MatrixPlan:
+    """An output made of matrices between diagrams, before they are computed: the
+    :class:`PairRequest` of each matrix, and ``finish(matrices)``, which makes the output
+    of them (in the requests' order). :func:`run_plans` computes the matrices of several
+    plans in one parallel call: one wait for the last block instead of one per plan.
+    ``n_jobs`` and ``verbose`` are those of the estimator that made the plan."""
+
+    def __init__(self, requests=(), finish=None, *, n_jobs=None, verbose=0):
+        self.requests = list(requests)
+        self.finish = finish
+        self.n_jobs, self.verbose = n_jobs, verbose
+
+    @classmethod
+    def ready(cls, output):
+        """The plan of an output already computed."""
+        return cls(finish=lambda _: output)
+
+
+def run_plans(plans) -> list:
+    """The output of each plan: the matrices of all the plans of one ``n_jobs`` in one
+    call of :func:`pair_matrices` (the blocks of every matrix of every plan, the
+    costliest first), then each plan's ``finish`` on its own. The values do not depend
+    on which plans run together."""
+    groups = {}
+    for plan in plans:
+        if plan.requests:
+            groups.setdefault(plan.n_jobs, []).append(plan)
+    matrices = {}
+    for n_jobs, group in groups.items():
+        requests = [r for plan in group for r in plan.requests]
+        verbose = max(plan.verbose for plan in group)
+        computed = iter(pair_matrices(requests, n_jobs=n_jobs, verbose=verbose))
+        for plan in group:
+            matrices[id(plan)] = [next(computed) for _ in plan.requests]
+    return [plan.finish(matrices.get(id(plan), [])) for plan in plans]
+
+
+def fit_transform_plan(estimator, X) -> MatrixPlan:
+    """``estimator.fit_transform(X)`` as a :class:`MatrixPlan`: a
+    :class:`PairwiseTransformer` is fitted now and leaves its matrices to the plan
+    (:class:`DiagramDistance` does; the kernels compute theirs now), any other
+    transformer computes its output now."""
+    if isinstance(estimator, PairwiseTransformer):
+        return estimator._fit_transform_plan(X)
+    return MatrixPlan.ready(estimator.fit_transform(X))
+
+
+def transform_plan(estimator, X) -> MatrixPlan:
+    """``estimator.transform(X)`` as a :class:`MatrixPlan` (see
+    :func:`fit_transform_plan`)."""
+    if isinstance(estimator, PairwiseTransformer):
+        return estimator._transform_plan(X)
+    return MatrixPlan.ready(estimator.transform(X))
+
+
 class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, DiagramTransformer):
     """Base of the transformers whose output is a matrix to their fitted samples: the
     distances and the kernels between diagrams.
@@ -477,8 +546,21 @@ class PairwiseTransformer(ClassNamePrefixFeaturesOutMixin, DiagramTransformer):
     fitted samples, ``<class name>0``, ``<class name>1``... Subclasses define
     ``_fit(X)`` (store the samples; return the symmetric matrix if fitting computed it,
     else None), ``_validate(X)`` and ``_matrix(left, right)`` (``right=None``: the
-    symmetric matrix of ``left``).
+    symmetric matrix of ``left``). Those that can leave their matrices to a
+    :class:`MatrixPlan` (so that several run in one parallel call, :func:`run_plans`)
+    override ``_fit_transform_plan(X)`` and ``_transform_plan(X)``, which compute the
+    output now by default.
     """
+
+    def _fit_transform_plan(self, X) -> MatrixPlan:
+        return MatrixPlan.ready(self.fit_transform(X))
+
+    def _transform_plan(self, X) -> MatrixPlan:
+        return MatrixPlan.ready(self.transform(X))
+
+    def _plan(self, requests, finish) -> MatrixPlan:
+        """A plan of this estimator's ``n_jobs`` and ``verbose``."""
+        return MatrixPlan(requests, finish, n_jobs=self.n_jobs, verbose=self.verbose)
 
     def _output(self, samples):
         return self._matrix(samples, self.diagrams_)

@@ -11,7 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer, as_sample_list, median_scale
 from .._param_validation import Interval, Options
 from .distances import METRICS, kernel_metric
-from .pairwise import PairwiseTransformer, distance_matrices, distance_matrix
+from .pairwise import PairwiseTransformer, distance_requests, run_plans
 from .validation import check_samples
 
 __all__ = ["DiagramDistance"]
@@ -151,6 +151,12 @@ class DiagramDistance(PairwiseTransformer):
 
     def _fit(self, X):
         """Fit; the fitted samples' symmetric matrix when it was computed, else None."""
+        return run_plans([self._fit_plan(X)])[0]
+
+    def _fit_plan(self, X):
+        """Validate and store the samples now; what fitting computes as a plan: the
+        median normalization's matrix of each position, whose finish learns the scales
+        and returns the combined matrix (nothing, finishing to None, otherwise)."""
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         SampleTransformer.fit(self, X)
         self.diagrams_ = check_samples(X)
@@ -160,10 +166,19 @@ class DiagramDistance(PairwiseTransformer):
         self.distance_params_ = {name: getattr(self, name) for name in _DISTANCE_PARAMS}
         self.scales_ = np.ones(self.n_diagrams_)
         if self.normalization == "none":
-            return None
-        parts = self._per_position(self.diagrams_, None)
+            return self._plan([], lambda _: None)
+        return self._plan(self._position_requests(self.diagrams_, None), self._learn_scales)
+
+    def _learn_scales(self, parts):
         self.scales_ = np.array([median_scale(part) for part in parts])
         return self._combine(parts)
+
+    def _fit_transform_plan(self, X):
+        fit = self._fit_plan(X)
+        return fit if fit.requests else self._matrix_plan(self.diagrams_, None)
+
+    def _transform_plan(self, X):
+        return self._matrix_plan(self._validate(X), self.diagrams_)
 
     def _kwargs(self, dtype=None):
         fitted = self.distance_params_
@@ -171,20 +186,17 @@ class DiagramDistance(PairwiseTransformer):
             metric=fitted["metric"],
             order=fitted["order"],
             internal_p=fitted["internal_p"],
-            n_jobs=self.n_jobs,
             dtype=np.dtype(dtype or self.dtype),
-            out=None,
-            verbose=self.verbose,
             n_directions=fitted["n_directions"],
         )
 
-    def _per_position(self, left, right):
-        """The float64 distance matrix of each position on its own, all in one call."""
+    def _position_requests(self, left, right):
+        """The requests of the float64 distance matrix of each position on its own."""
         sides = [
             ([s[k : k + 1] for s in left], None if right is None else [s[k : k + 1] for s in right])
             for k in range(self.n_diagrams_)
         ]
-        return distance_matrices(sides, **self._kwargs(dtype="float64"))
+        return distance_requests(sides, **self._kwargs(dtype="float64"))
 
     def _combine(self, parts):
         """Per-position matrices divided by their scales, combined as the metric combines
@@ -199,10 +211,14 @@ class DiagramDistance(PairwiseTransformer):
             total = sum(part**q for part in scaled) ** (1.0 / q)
         return total.astype(self.dtype, copy=False)
 
-    def _matrix(self, left, right):
+    def _matrix_plan(self, left, right):
         if self.distance_params_["normalization"] == "none":
-            return distance_matrix(left, right, **self._kwargs())
-        return self._combine(self._per_position(left, right))
+            requests = distance_requests([(left, right)], **self._kwargs())
+            return self._plan(requests, lambda matrices: matrices[0])
+        return self._plan(self._position_requests(left, right), self._combine)
+
+    def _matrix(self, left, right):
+        return run_plans([self._matrix_plan(left, right)])[0]
 
     def _check_fitted(self) -> None:
         """Fitted, and under the distance parameters that ``scales_`` were learned with."""
