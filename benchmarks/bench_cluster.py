@@ -8,8 +8,9 @@ A ``LocalCluster`` of 2 worker processes against one of 1, through
 ``joblib.parallel_backend("dask")``, on the stages of ``make_mesh_distance()`` that
 hold the time: the eigen stage (one solve per mesh, no cache) on ``--per-class``
 meshes of each ``watertight_dev`` class (10 is all 200), and the distance blocks of the
-default's diagram parts (each kind's 1-Wasserstein distance: one parallel call of the
-blocks of its five times' matrices) on their diagrams and
+default's diagram parts (each kind's 1-Wasserstein distance at five times: one
+parallel call of the blocks of all fifteen matrices, as the default's
+``CombinedDistance`` makes it) on their diagrams and
 ``--copies - 1`` jittered copies of them (each point moved by up to 5% of its
 persistence), so that the matrices hold enough pairs to share. Each worker runs one
 task at a time, and both clusters show joblib 2 threads: joblib runs everything in
@@ -26,7 +27,11 @@ workers (the work), the longest task (the least tail a schedule can leave), the
 workers' busy share of the wall time (work / (workers x wall)), the tasks each worker
 ran and the longest time a worker sat idle within the stage: measures of the schedule,
 which hold on a busy machine where the wall times do not; the CPU seconds of the
-calling process (its serial share: sending, receiving, assembling). Then the cost of
+calling process (its serial share: sending, receiving, assembling). For the distance
+blocks, also the CPU seconds of each block measured inside it on its worker (its
+thread's CPU time): their sum on 2 workers against 1 tells the blocks' own work
+growing (caches, memory, a slower core) from their wall time growing while another
+process holds their core. Then the cost of
 shipping the meshes: their pickled bytes, and the seconds of one task per mesh that
 only receives it, the mesh sent with its task or scattered first, against the same
 tasks without a mesh.
@@ -59,6 +64,7 @@ from joblib import parallel_backend
 from sklearn.base import clone
 
 from sklearn_meshph import load_mesh_folder, make_mesh_distance, make_shapes
+from sklearn_meshph.diagrams.pairwise import fit_transform_plan, run_plans
 from sklearn_meshph.mesh.reading import read_mesh_file
 
 # Both clusters show joblib 2 threads (it runs in the caller when a cluster has 1),
@@ -86,6 +92,13 @@ def stages(n_jobs, memory=None):
         if "persistence" in steps:
             parts.append((kind, steps["persistence"], steps["distance"]))
     return eigen, parts
+
+
+def distance_matrices(parts, diagrams):
+    """Each kind's distance matrix of its ``diagrams``, all kinds' blocks in one parallel
+    call (what the default's ``CombinedDistance`` does after the persistence steps)."""
+    plans = [fit_transform_plan(clone(distance), diagrams[kind]) for kind, _, distance in parts]
+    return dict(zip([kind for kind, *_ in parts], run_plans(plans), strict=True))
 
 
 def jittered(diagrams, copies, seed=0):
@@ -116,10 +129,8 @@ def run_stages(meshes, diagrams, n_jobs, fields=None):
         start = time.perf_counter()
         fields = eigen.fit_transform(meshes)
         times["eigen"] = time.perf_counter() - start
-    matrices = {}
     start = time.perf_counter()
-    for kind, _, distance in parts:
-        matrices[kind] = clone(distance).fit_transform(diagrams[kind])
+    matrices = distance_matrices(parts, diagrams)
     times["distances"] = time.perf_counter() - start
     return times, fields, matrices
 
@@ -175,6 +186,33 @@ def _warm():
     make_mesh_distance(n_jobs=1).fit_transform(list(meshes))
 
 
+def _start_block_clock():
+    """On a worker: from now on, record each distance block's CPU seconds (its thread's
+    CPU time, measured inside the task), forgetting those recorded before."""
+    import time
+
+    import sklearn_meshph.diagrams.pairwise as pairwise
+
+    if not hasattr(pairwise, "_block_clocks"):
+        block, pairwise._block_clocks = pairwise._block, []
+
+        def clocked(*args):
+            start = time.thread_time()
+            values = block(*args)
+            pairwise._block_clocks.append(time.thread_time() - start)
+            return values
+
+        pairwise._block = clocked  # tasks name it: the workers unpickle this one
+    pairwise._block_clocks.clear()
+
+
+def _block_clocks():
+    """On a worker: the CPU seconds of the blocks recorded by ``_start_block_clock``."""
+    import sklearn_meshph.diagrams.pairwise as pairwise
+
+    return list(pairwise._block_clocks)
+
+
 def _received(item):
     return item is not None
 
@@ -225,10 +263,6 @@ def on_cluster(n_workers, meshes, diagrams, reference, measured):
         fields, matrices = reference[0], {}
         eigen, parts = stages(n_jobs=-1)
 
-        def distances():
-            for kind, _, distance in parts:
-                matrices[kind] = clone(distance).fit_transform(diagrams[kind])
-
         with parallel_backend("dask", **({"resources": slot} if slot else {})):
             for stage in measured:
                 with get_task_stream(client) as stream:
@@ -236,10 +270,14 @@ def on_cluster(n_workers, meshes, diagrams, reference, measured):
                     if stage == "eigen":
                         fields = eigen.fit_transform(meshes)
                     else:
-                        distances()
+                        client.run(_start_block_clock)
+                        matrices = distance_matrices(parts, diagrams)
                     stop, cpu = time.time(), time.process_time() - cpu
                 summary = task_summary(stream.data, start, stop, n_workers)
                 result[stage] = {"wall_s": stop - start, "client_cpu_s": cpu, **summary}
+                if stage == "distances":
+                    clocks = [c for worker in client.run(_block_clocks).values() for c in worker]
+                    result[stage]["block_cpu_s"] = float(sum(clocks))
         check_identical(fields, matrices, reference, f"{n_workers} dask worker(s)")
         if n_workers == max(WORKERS) and "eigen" in measured:
             result["shipping"] = shipping(client, meshes)
@@ -280,12 +318,10 @@ def schedule(meshes, copies):
 
     pairwise._block, pairwise.pair_matrices = timed_block, counted_matrices
     pairwise.effective_n_jobs = lambda n_jobs: max(WORKERS)  # the blocks of 2 workers
-    total = 0.0
-    for _, persistence, distance in parts:
-        diagrams = jittered(persistence.fit_transform(fields), copies)
-        start = time.process_time()
-        clone(distance).fit_transform(diagrams)
-        total += time.process_time() - start
+    diagrams = {kind: jittered(p.fit_transform(fields), copies) for kind, p, _ in parts}
+    start = time.process_time()
+    distance_matrices(parts, diagrams)
+    total = time.process_time() - start
     work = sum(map(sum, calls))
     span = sum(_makespan(c, max(WORKERS)) for c in calls)
     print(
@@ -338,7 +374,7 @@ def main():
         for kind, persistence, _ in parts
     }
     start, cpu = time.perf_counter(), time.process_time()
-    ref_matrices = {kind: clone(d).fit_transform(diagrams[kind]) for kind, _, d in parts}
+    ref_matrices = distance_matrices(parts, diagrams)
     local["distances"] = time.perf_counter() - start
     distances_cpu = time.process_time() - cpu
     reference = (ref_fields, ref_matrices)
@@ -395,6 +431,14 @@ def main():
                 f"{s['largest_task_s']:.2f} | {s['busy']:.0%} | {s['longest_idle_s']:.2f} | "
                 f"{s['client_cpu_s']:.1f} |"
             )
+    one, two = results[1]["distances"], results[max(WORKERS)]["distances"]
+    print()
+    print(
+        f"distance blocks' work, 2 workers against 1: {two['compute_s']:.1f} / "
+        f"{one['compute_s']:.1f} s of task time ({two['compute_s'] / one['compute_s']:.2f}), "
+        f"{two['block_cpu_s']:.1f} / {one['block_cpu_s']:.1f} s of CPU measured inside "
+        f"the blocks ({two['block_cpu_s'] / one['block_cpu_s']:.2f})"
+    )
     if "shipping" in results[max(WORKERS)]:
         ship = results[max(WORKERS)]["shipping"]
         print()

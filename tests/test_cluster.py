@@ -2,8 +2,9 @@
 every stage runs on the workers and the output is bitwise the local run's on one core;
 the eigen cache in a folder the workers share is written by them and read back; the
 diagrams every block of pairs reads go to every worker once per call; the blocks of all
-the diagram positions of a distance go in one parallel call, costliest first; and
-``n_jobs=1`` runs everything in the calling process.
+the diagram positions of a distance, and of all the default's diagram distances, go in
+one parallel call, costliest first; and ``n_jobs=1`` runs everything in the calling
+process.
 
 A ``LocalCluster`` of 2 worker processes (one thread each) serves the module, and one of
 a single worker process with two threads (joblib then sends it tasks) the tests that
@@ -15,9 +16,11 @@ from contextlib import nullcontext
 import numpy as np
 import pytest
 from joblib import parallel_backend
+from sklearn.pipeline import Pipeline
 
 import sklearn_meshph.diagrams.pairwise as pairwise
 from sklearn_meshph import (
+    CombinedDistance,
     DiagramDistance,
     PerDiagramDistance,
     make_mesh_distance,
@@ -274,3 +277,34 @@ def test_the_defaults_diagram_distances_go_in_one_parallel_call(monkeypatch):
         assert costs == sorted(costs, reverse=True)
     np.testing.assert_array_equal(fitted, expected[0])
     np.testing.assert_array_equal(transformed, expected[1])
+
+
+def test_parts_that_cannot_leave_their_matrices_compute_them_as_before(tmp_path, monkeypatch):
+    """A Pipeline with memory computes its distance in its own fit_transform; the parts
+    of one n_jobs go in one call, those of another in theirs; same output either way."""
+    calls, original = [], pairwise.pair_matrices
+
+    def counting(requests, **kwargs):
+        calls.append((len(requests), kwargs["n_jobs"]))
+        return original(requests, **kwargs)
+
+    def part(n_jobs, **pipeline):
+        distance = DiagramDistance(metric="wasserstein", normalization="median", n_jobs=n_jobs)
+        return Pipeline([("distance", distance)], **pipeline)
+
+    def combined(n_jobs, other):
+        names = ("a", "b", "cached", "alone")
+        parts = [part(n_jobs), part(n_jobs), part(n_jobs, memory=str(tmp_path)), part(other)]
+        return CombinedDistance(list(zip(names, parts, strict=True)))
+
+    X, Y = uneven_samples(40), uneven_samples(5, seed=1)
+    reference = combined(1, 1).fit(X)
+    expected = reference.fit_transform(X), reference.transform(Y)
+    monkeypatch.setattr(pairwise, "pair_matrices", counting)
+    with parallel_backend("threading"):
+        fitted = combined(2, 1).fit(X)
+        calls.clear()
+        matrix = fitted.fit_transform(X)
+        assert calls == [(3, 2), (6, 2), (3, 1)]  # cached, then a + b, then alone
+        np.testing.assert_array_equal(matrix, expected[0])
+        np.testing.assert_array_equal(fitted.transform(Y), expected[1])
