@@ -152,3 +152,70 @@ def test_lanczos_finds_a_known_spectrum_under_a_dominant_eigenvalue():
     assert found is not None
     np.testing.assert_allclose(found[0], theta[:41], rtol=1e-10)
     np.testing.assert_allclose(np.abs(found[1] @ Q[:, :40]), np.eye(40), atol=1e-7)
+
+
+def test_lanczos_keeps_a_known_null_vector_out_of_the_run():
+    # The same operator with its dominant eigenvector given: the run finds the
+    # eigenpairs after it, orthogonal to it (without it, the first one found is it).
+    n = 600
+    theta = np.concatenate([[1e3], 1.0 / np.arange(1, n)])
+    rng = np.random.default_rng(0)
+    Q = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    factor = SupernodalCholesky(sp.csr_matrix((Q / theta) @ Q.T))
+    found = shift_invert_lanczos(
+        factor, np.ones(n), 40, v0=rng.uniform(-1, 1, n), tol=1e-8, max_steps=164, null=Q[:, 0]
+    )
+    assert found is not None
+    np.testing.assert_allclose(found[0], theta[1:42], rtol=1e-10)
+    np.testing.assert_allclose(np.abs(found[1] @ Q[:, 1:41]), np.eye(40), atol=1e-7)
+    assert np.abs(found[1] @ Q[:, 0]).max() < 1e-12
+
+
+def test_the_constant_eigenfunction_is_known_in_advance_where_rows_sum_to_zero(monkeypatch):
+    vertices, faces = irregular_ellipsoid(3, seed=1)
+    L, M = operator(vertices, faces)
+    mass = M.diagonal()
+    null = eigensolver.constant_null_vector(L, mass)
+    np.testing.assert_allclose(null, 1.0 / np.sqrt(mass.sum()))
+    # A Laplacian whose rows do not sum to zero (a normalized one, a potential) has none.
+    assert eigensolver.constant_null_vector(L + sp.diags(np.full(L.shape[0], 1e-6)), mass) is None
+    kept_out = []
+    original = eigensolver.shift_invert_lanczos
+
+    def spy(factor, mass, n_eigenpairs, **kwargs):
+        kept_out.append((n_eigenpairs, kwargs["null"] is not None))
+        return original(factor, mass, n_eigenpairs, **kwargs)
+
+    monkeypatch.setattr(eigensolver, "shift_invert_lanczos", spy)
+    values, vectors = generalized_eigenpairs(L, M, 24, points=vertices)
+    assert kept_out == [(23, True)]
+    assert values[0] == 0.0
+    np.testing.assert_allclose(vectors[:, 0], null, rtol=1e-14)
+    expected, _ = dense_eigenpairs(L, mass, 24)
+    np.testing.assert_allclose(values[1:], expected[1:], rtol=1e-10)
+    np.testing.assert_allclose((vectors.T * mass) @ vectors, np.eye(24), atol=1e-10)
+
+
+def test_the_inertia_count_reuses_the_factor_analysis_where_patterns_agree(monkeypatch):
+    from sklearn_meshph.spectral import _cholesky
+
+    vertices, faces = irregular_ellipsoid(2, seed=3)
+    L, M = operator(vertices, faces)
+    values = dense_eigenpairs(L, M.diagonal(), 40)[0]
+    factor = SupernodalCholesky(L + 1e-2 * M, fill_reducing_order(L.tocsr(), vertices))
+    analyses = []
+    original = _cholesky._etree
+    monkeypatch.setattr(_cholesky, "_etree", lambda *a: analyses.append(1) or original(*a))
+    for count in [1, 7, 30, 39]:
+        tau = 0.5 * (values[count - 1] + values[count])
+        assert negative_eigenvalues(L - tau * M, like=factor) == count
+    assert analyses == []
+    # Another pattern (an edge's entries removed): analysed afresh, counted right.
+    A = (L - 0.5 * (values[6] + values[7]) * M).tolil()
+    i, j = L.nonzero()[0][1], L.nonzero()[1][1]
+    A[i, j] = A[j, i] = 0.0
+    A = A.tocsr()
+    A.eliminate_zeros()
+    expected = int(np.count_nonzero(np.linalg.eigvalsh(A.toarray()) < 0))
+    assert negative_eigenvalues(A, like=factor) == expected
+    assert analyses != []

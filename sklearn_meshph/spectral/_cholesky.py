@@ -469,14 +469,21 @@ class SupernodalCholesky:
         self.rowptr, self.rowind, child_ptr, child = _symbolic_rows(
             n, indptr, indices, self.first, sparent
         )
+        self._pattern = (indptr, indices, child_ptr, child)
+        return self._refactor(B.data, signs)
+
+    def _refactor(self, data, signs):
+        """The numeric factorization of the matrix of values ``data`` on the analysed
+        pattern (``signs``: see :func:`_numeric`); returns ``info``."""
+        indptr, indices, child_ptr, child = self._pattern
         # One BLAS thread: a threaded BLAS is far slower on thousands of small calls,
         # and its results depend on the thread count.
         with one_blas_thread():
             self.lptr, self.lx, info = _numeric(
-                n,
+                self.shape[0],
                 indptr,
                 indices,
-                B.data,
+                data,
                 self.first,
                 self.rowptr,
                 self.rowind,
@@ -486,6 +493,17 @@ class SupernodalCholesky:
                 signs,
             )
         return info
+
+    def _same_pattern_values(self, A: sp.spmatrix) -> np.ndarray | None:
+        """The values of ``P A P^T`` on this factor's pattern, or None when ``A``'s
+        pattern differs (an entry cancelled to zero, for one)."""
+        indptr, indices = self._pattern[:2]
+        B = check_square_finite(A)[self.perm][:, self.perm].tocsr()
+        B.sum_duplicates()
+        B.sort_indices()
+        if not (np.array_equal(B.indptr, indptr) and np.array_equal(B.indices, indices)):
+            return None
+        return B.data
 
     @property
     def nnz(self) -> int:
@@ -514,14 +532,24 @@ class SupernodalCholesky:
         return out
 
 
-def negative_eigenvalues(A: sp.spmatrix, perm: np.ndarray | None = None) -> int:
+def negative_eigenvalues(
+    A: sp.spmatrix, perm: np.ndarray | None = None, *, like: SupernodalCholesky | None = None
+) -> int:
     """The number of negative eigenvalues of a sparse symmetric ``A``, nonsingular (both
     triangles stored), by Sylvester's law of inertia: the negative pivots of its
     factorization ``C S C^T`` on the fill-reducing order ``perm``, without pivoting, so
     meant for matrices with few negative eigenvalues (``L - tau M`` with ``tau`` low in
-    the spectrum, between two eigenvalues). A zero pivot is a ``ValueError``."""
+    the spectrum, between two eigenvalues). ``like``: a factor of a matrix of the same
+    pattern, whose analysis (order, supernodes, rows) is reused when the patterns agree
+    (``perm`` is then ignored). A zero pivot is a ``ValueError``."""
     factor = SupernodalCholesky.__new__(SupernodalCholesky)
     signs = np.ones(A.shape[0])
-    if factor._factor(A, perm, signs):
+    data = like._same_pattern_values(A) if like is not None else None
+    if data is not None:
+        factor.__dict__.update(like.__dict__)  # the analysis; lptr and lx are replaced
+        info = factor._refactor(data, signs)
+    else:
+        info = factor._factor(A, perm, signs)
+    if info:
         raise ValueError("zero pivot: the matrix is singular or nearly so")
     return int(np.count_nonzero(signs < 0.0))

@@ -78,6 +78,9 @@ _LANCZOS = True
 # they agree within this (relative), the boundary cuts through a repeated eigenvalue and
 # ARPACK solves again.
 _BOUNDARY_RTOL = 1e-6
+# The constant is an eigenvector of eigenvalue 0 when every row of L sums to zero within
+# this share of the row's absolute sum (rounding leaves about 1e-16).
+_NULL_RTOL = 1e-12
 
 
 def eigen_shift(L: sp.spmatrix, M: sp.spmatrix) -> float:
@@ -141,27 +144,44 @@ def dense_eigenpairs(
     return values, vectors * inverse_root[:, None]
 
 
+def constant_null_vector(L: sp.spmatrix, mass: np.ndarray) -> np.ndarray | None:
+    """The constant function, M-normalized, when it is an eigenvector of eigenvalue 0
+    (the rows of ``L`` sum to zero up to rounding: the cotangent, combinatorial and
+    random-walk Laplacians, not the normalized one); otherwise None."""
+    rows = abs(L).sum(axis=1).A1
+    if not np.all(np.abs(L.sum(axis=1).A1) <= _NULL_RTOL * rows):
+        return None
+    return np.full(L.shape[0], 1.0 / np.sqrt(mass.sum()))
+
+
 def _lanczos(L, M, sigma, op, v0, n_eigenpairs):
     """The Lanczos run's eigenpairs, ascending, checked by the inertia of ``L - tau M``,
-    or ``(None, None)`` when it does not converge or the check fails."""
+    or ``(None, None)`` when it does not converge or the check fails. The constant
+    eigenfunction, when it is one, is kept out of the run and put first."""
     mass = M.diagonal()
+    null = constant_null_vector(L, mass) if n_eigenpairs > 1 else None
+    wanted = n_eigenpairs - (null is not None)
     found = shift_invert_lanczos(
         op.factor,
         mass,
-        n_eigenpairs,
+        wanted,
         v0=v0,
         tol=_TOLERANCE,
-        max_steps=max(_MAX_STEPS_RATIO * (n_eigenpairs + 1), _MIN_BASIS),
+        max_steps=max(_MAX_STEPS_RATIO * (wanted + 1), _MIN_BASIS),
+        null=null,
     )
     if found is None:
         return None, None
     theta, vectors = found
     values = sigma + 1.0 / theta
+    if null is not None:
+        values = np.concatenate([[0.0], values])
+        vectors = np.concatenate([null[None], vectors])
     last, following = values[-2], values[-1]
     if not following - last > _BOUNDARY_RTOL * abs(following):
         return None, None
     try:
-        below = negative_eigenvalues(L - 0.5 * (last + following) * M, op.factor.perm)
+        below = negative_eigenvalues(L - 0.5 * (last + following) * M, like=op.factor)
     except ValueError:  # a zero pivot: tau on an eigenvalue
         return None, None
     if below != n_eigenpairs:

@@ -13,6 +13,12 @@ the whole basis, bound by memory). Every few steps the Ritz pairs' residual boun
 decide convergence, as ARPACK's ``tol`` does. The Ritz vectors are formed in place in
 the basis, whose unused rows are then released.
 
+A null vector known in advance (the constant function of a Laplacian whose rows sum to
+zero) is kept out of the Krylov space: the start vector is made orthogonal to it, and so
+is each new vector, since rounding brings it back at every step amplified by its
+``theta = -1 / sigma``, the largest of all. The run then seeks the eigenpairs after it
+only, and the basis loses its orthogonality about a third less often.
+
 A single Krylov sequence finds one vector of each eigenspace, the others only as
 rounding brings them in: repeated eigenvalues must be checked by the caller (the
 eigensolver counts the eigenvalues below a shift by the inertia of ``L - tau M``).
@@ -47,12 +53,13 @@ def _orthogonalize(basis, rows, w):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _steps(basis, start, stop, alpha, beta, omega, state, root, factor, scratch, blas):
+def _steps(basis, start, stop, alpha, beta, omega, state, root, null, factor, scratch, blas):
     """Lanczos steps ``start .. stop - 1``: each writes ``alpha[j]``, ``beta[j]`` and the
     next vector ``basis[j + 1]``. ``omega`` (3 rows) holds the orthogonality estimates of
     the last three vectors, ``state`` the norm estimate, the rounding factor and whether
-    the next vector must be reorthogonalized; ``factor`` is the factor's panels, in
-    whose order the basis is. Returns False on a breakdown (an invariant subspace)."""
+    the next vector must be reorthogonalized; ``null`` is a unit vector kept out of the
+    basis (empty: none); ``factor`` is the factor's panels, in whose order the basis
+    is. Returns False on a breakdown (an invariant subspace)."""
     first, rowptr, rowind, lptr, lx = factor
     x, work = scratch[0], scratch[1]
     n = len(root)
@@ -74,11 +81,11 @@ def _steps(basis, start, stop, alpha, beta, omega, state, root, factor, scratch,
             for i in range(n):
                 w[i] = root[i] * x[i]
                 a += w[i] * v[i]
-        total = 0.0
         for i in range(n):
             w[i] -= a * v[i]
-            total += w[i] * w[i]
-        norm = np.sqrt(total)
+        if len(null):
+            w -= np.dot(null, w) * null
+        norm = np.sqrt(np.dot(w, w))
         alpha[j] = a
         state[0] = max(state[0], abs(a) + norm + (beta[j - 1] if j > 0 else 0.0))
         rounding = state[1] * state[0]
@@ -123,17 +130,25 @@ def _ritz_in_place(basis, steps, coefficients):
     return basis
 
 
-def shift_invert_lanczos(factor, mass, n_eigenpairs, *, v0, tol, max_steps):
+def shift_invert_lanczos(factor, mass, n_eigenpairs, *, v0, tol, max_steps, null=None):
     """The ``n_eigenpairs`` largest eigenvalues ``theta`` of ``C`` (see the module) and
     the next one, in decreasing order, and the eigenvectors ``phi = M^-1/2 u`` of the
     first ``n_eigenpairs`` as rows of an ``(n_eigenpairs, n)`` array; ``None`` when the
     ``max_steps`` solves do not converge or the sequence breaks down (an invariant
     subspace). ``factor``: a :class:`._cholesky.SupernodalCholesky` of ``A``.
-    Convergence: every residual bound below ``tol`` times its ``theta``, ``sqrt(tol)``
-    for the next one (it only bounds the others)."""
+    ``null``: an eigenvector ``phi`` of the pencil known in advance (M-orthonormal), kept
+    out of the run: the eigenpairs are then those after it. Convergence: every residual
+    bound below ``tol`` times its ``theta``, ``sqrt(tol)`` for the next one (it only
+    bounds the others)."""
     n = len(mass)
     perm = factor.perm
     root = np.sqrt(mass[perm])
+    kept_out = np.empty(0)
+    start = v0[perm]
+    if null is not None:  # in C's coordinates: M^1/2 phi, of unit norm
+        kept_out = root * null[perm]
+        kept_out /= np.linalg.norm(kept_out)
+        start = start - np.dot(kept_out, start) * kept_out
     max_steps = min(max_steps, n)
     basis = np.empty((max_steps + 1, n))  # pages are touched only as rows are written
     alpha = np.zeros(max_steps)
@@ -143,12 +158,13 @@ def shift_invert_lanczos(factor, mass, n_eigenpairs, *, v0, tol, max_steps):
     state = np.array([0.0, 0.5 * _EPS * np.sqrt(n), 0.0])  # PROPACK's rounding factor
     scratch = np.empty((2, n))
     panels = (factor.first, factor.rowptr, factor.rowind, factor.lptr, factor.lx)
-    basis[0] = v0[perm] / np.linalg.norm(v0)
+    basis[0] = start / np.linalg.norm(start)
     first = max(_FIRST_CHECK * n_eigenpairs, n_eigenpairs + 1)
+    args = (alpha, beta, omega, state, root, kept_out, panels, scratch, BLAS)
     steps = 0
     while steps < max_steps:
         stop = first if steps < first else min(steps + _CHECK_EVERY, max_steps)
-        if not _steps(basis, steps, stop, alpha, beta, omega, state, root, panels, scratch, BLAS):
+        if not _steps(basis, steps, stop, *args):
             return None
         steps = stop
         theta, vectors = scipy.linalg.eigh_tridiagonal(alpha[:steps], beta[: steps - 1])
