@@ -248,8 +248,11 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     its arguments in a fixed order whatever the order of the keywords: a new
     ``transformer_list`` first, then parts replaced by name, then the other parameters
     and the parts' own (``<name>__<parameter>``), so that nested parameters reach the
-    parts given in the same call. The output's columns are named ``combineddistance0``,
-    ``combineddistance1``... after the fitted samples (:meth:`get_feature_names_out`).
+    parts given in the same call. The parts' diagram distances (a
+    :class:`DiagramDistance`, alone or ending a :class:`~sklearn.pipeline.Pipeline`)
+    are computed together, in one parallel call after the steps before them. The
+    output's columns are named ``combineddistance0``, ``combineddistance1``... after
+    the fitted samples (:meth:`get_feature_names_out`).
 
     Examples
     --------

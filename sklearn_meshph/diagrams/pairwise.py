@@ -1,6 +1,8 @@
 """Matrices between collections of diagrams: the one scheduler of blocks of pairs
-(:func:`pair_matrix`, behind the distances and the kernels), the distance matrix, and
-the base of the transformers that return a matrix to their fitted samples."""
+(:func:`pair_matrix`, behind the distances and the kernels), the distance matrix, the
+plans that put the matrices of several distances in one parallel call
+(:func:`run_plans`), and the base of the transformers that return a matrix to their
+fitted samples."""
 
 from __future__ import annotations
 
