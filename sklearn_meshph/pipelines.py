@@ -25,7 +25,14 @@ from .persistence import LowerStarPersistence
 from .persistence.filtrations import FILTRATIONS
 from .spectral import LAPLACIANS, SIGNATURES, SOLVERS, LaplacianEigenTransformer, ShapeDNA
 from .spectral.cache import cache_of
-from .vectorization import DiagramStatistics, DistanceScaler, GraphFeatures, PersistenceLandscape
+from .vectorization import (
+    DiagramStatistics,
+    DistanceScaler,
+    GraphFeatures,
+    GraphPairDistances,
+    KernelSumSVC,
+    PersistenceLandscape,
+)
 
 __all__ = [
     "PRESETS",
@@ -441,6 +448,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
 @validate_params(
     {
         "times": [tuple, list],
+        "classifier": [Options(("trees", "kernels"))],
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
@@ -452,6 +460,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
 def make_graph_classifier(
     *,
     times=_GRAPH_CLASSIFIER_TIMES,
+    classifier="trees",
     n_estimators=_GRAPH_TREES,
     min_samples_leaf=1,
     memory=None,
@@ -487,6 +496,13 @@ def make_graph_classifier(
     ----------
     times : tuple of float, default=(0.1, 1.0, 10.0)
         Times of the heat kernel signatures: PersLay's 0.1 and 10, and 1 between them.
+    classifier : {"trees", "kernels"}, default="trees"
+        ``"kernels"``: the steps after ``"eigen"`` are ``"distances"``
+        (:class:`GraphPairDistances`: sliced Wasserstein distances of the diagrams, the
+        Weisfeiler-Lehman patterns' distance, the features' Canberra distance) and
+        ``"classifier"`` (:class:`KernelSumSVC`: the diagrams' kernels averaged into
+        one, the sum of kernels and ``C`` chosen by internal cross-validation on the
+        training graphs); ``n_estimators`` and ``min_samples_leaf`` are then unused.
     n_estimators : int, default=300
         Trees of the forest (of each candidate forest).
     min_samples_leaf : int or tuple of int, default=1
@@ -533,6 +549,15 @@ def make_graph_classifier(
         {"memory": memory, "n_jobs": n_jobs, "random_state": random_state, "verbose": verbose},
         tuple(times),
     )
+    if classifier == "kernels":
+        groups = (0,) * (len(_GRAPH_KINDS) * len(times)) + (1, 2)
+        return Pipeline(
+            [
+                ("eigen", eigen),
+                ("distances", GraphPairDistances(n_jobs=n_jobs)),
+                ("classifier", KernelSumSVC(groups, random_state=random_state)),
+            ]
+        )
     diagrams = Pipeline(
         [
             (

@@ -4,6 +4,8 @@ kernels (precomputed kernel matrices) of persistence diagrams."""
 from .curves import BettiCurve, EntropyCurve, PersistenceLandscape, Silhouette
 from .distance_kernel import DistanceKernel
 from .graph_features import GraphFeatures
+from .graph_pairs import GraphPairDistances
+from .graph_svc import KernelSumSVC
 from .images import PersistenceImage
 from .kernels import (
     PersistenceScaleSpaceKernel,
@@ -20,6 +22,8 @@ __all__ = [
     "DistanceScaler",
     "EntropyCurve",
     "GraphFeatures",
+    "GraphPairDistances",
+    "KernelSumSVC",
     "PersistenceEntropy",
     "PersistenceImage",
     "PersistenceLandscape",

@@ -139,24 +139,35 @@ def _mix(labels: np.ndarray) -> np.ndarray:
         return x ^ (x >> _SHIFTS[2])
 
 
-def _patterns(edges: np.ndarray, n: int, iterations: int, buckets: int) -> np.ndarray:
-    """Counts of the Weisfeiler-Lehman patterns of the degrees, hashed into buckets.
+def wl_labels(edges: np.ndarray, n: int, iterations: int):
+    """The node labels of each Weisfeiler-Lehman iteration, the degrees first.
 
-    Iteration 0 is the degree histogram (degrees from ``buckets - 1`` up share the last
-    bin); each further iteration relabels every node by a hash of its label and the
-    multiset of its neighbours' labels (a sum of their hashes, which ignores the
-    order), and counts the new labels modulo ``buckets``.
+    Yields ``iterations + 1`` arrays of ``n`` uint64 labels: the degrees, then at each
+    iteration a hash of every node's label and the multiset of its neighbours' labels
+    (a sum of their hashes, which ignores the order).
     """
     source, target = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
-    degree = np.bincount(source, minlength=n)
-    counts = [np.bincount(np.minimum(degree, buckets - 1), minlength=buckets)]
-    labels = degree.astype(np.uint64)
+    labels = np.bincount(source, minlength=n).astype(np.uint64)
+    yield labels
     for _ in range(iterations):
         neighbours = np.zeros(n, dtype=np.uint64)
         with np.errstate(over="ignore"):
             np.add.at(neighbours, source, _mix(labels[target]))
             labels = _mix(labels * _PRIME + neighbours)
-        counts.append(np.bincount((labels % np.uint64(buckets)).astype(np.intp), minlength=buckets))
+        yield labels
+
+
+def _patterns(edges: np.ndarray, n: int, iterations: int, buckets: int) -> np.ndarray:
+    """Counts of the Weisfeiler-Lehman patterns of the degrees, hashed into buckets.
+
+    Iteration 0 is the degree histogram (degrees from ``buckets - 1`` up share the last
+    bin); each further iteration counts the new labels (:func:`wl_labels`) modulo
+    ``buckets``.
+    """
+    counts = []
+    for i, labels in enumerate(wl_labels(edges, n, iterations)):
+        bins = np.minimum(labels, buckets - 1) if i == 0 else labels % np.uint64(buckets)
+        counts.append(np.bincount(bins.astype(np.intp), minlength=buckets))
     return np.concatenate(counts).astype(np.float64)
 
 

@@ -1,0 +1,170 @@
+"""GraphPairDistances: the distances between graphs that a sum of kernels is made of
+(the sliced Wasserstein distance of each extended diagram, the Weisfeiler-Lehman
+patterns' distance, the Canberra distance of the features), stacked per pair."""
+
+from __future__ import annotations
+
+from numbers import Integral
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial.distance import cdist
+from sklearn.utils.validation import check_is_fitted
+
+from .._base import SampleTransformer
+from .._param_validation import Interval
+from ..diagrams.per_diagram import PerDiagramDistance
+from ..persistence import LowerStarPersistence
+from .graph_features import GraphFeatures, wl_labels
+from .summaries import DiagramStatistics
+
+__all__ = ["GraphPairDistances"]
+
+
+def _pattern_counts(field, iterations: int):
+    """The distinct Weisfeiler-Lehman labels of a graph (iteration-salted) and counts."""
+    labels = [
+        level * np.uint64(2**61 - 1) + values
+        for level, values in enumerate(wl_labels(field.edges, field.n_vertices, iterations))
+    ]
+    with np.errstate(over="ignore"):
+        return np.unique(np.concatenate(labels), return_counts=True)
+
+
+def _pattern_distances(left, right) -> np.ndarray:
+    """``2 - 2 k`` for the normalized Weisfeiler-Lehman kernel ``k`` of each pair: the
+    squared distance between the graphs' count vectors scaled to unit length."""
+    vocabulary = np.unique(np.concatenate([labels for labels, _ in left + right]))
+
+    def matrix(side):
+        rows = np.repeat(np.arange(len(side)), [len(labels) for labels, _ in side])
+        cols = np.searchsorted(vocabulary, np.concatenate([labels for labels, _ in side]))
+        counts = np.concatenate([counts for _, counts in side]).astype(np.float64)
+        m = sp.csr_matrix((counts, (rows, cols)), shape=(len(side), len(vocabulary)))
+        return sp.diags(1.0 / np.sqrt(m.multiply(m).sum(axis=1).A1)) @ m
+
+    kernel = (matrix(left) @ matrix(right).T).toarray()
+    return np.maximum(2.0 - 2.0 * kernel, 0.0)
+
+
+class GraphPairDistances(SampleTransformer):
+    """Distances between graphs, one matrix per kind, stacked: what
+    :class:`KernelSumSVC` turns into a sum of kernels.
+
+    ``fit`` stores the graphs' extended diagrams, features and Weisfeiler-Lehman
+    patterns; ``transform(X)`` returns the ``(len(X), n_fitted, n_positions)`` array of
+    the distances of each graph of ``X`` to each fitted graph, and ``fit_transform(X)``
+    the symmetric stack of ``X`` (each pair computed once). The positions are
+
+    - one per extended diagram (the four kinds of :class:`LowerStarPersistence` with
+      ``filtration="extended"`` for each signature): the sliced Wasserstein distance,
+      whose ``exp(-d / (2 sigma^2))`` is the sliced Wasserstein kernel;
+    - the Weisfeiler-Lehman subtree patterns of the degrees (Shervashidze et al., JMLR
+      2011): ``2 - 2 k`` with ``k`` the normalized count kernel (exact patterns,
+      ``wl_iterations`` iterations after the degrees);
+    - the Canberra distance between the features (:class:`DiagramStatistics` of the
+      diagrams and :class:`GraphFeatures`), which no feature's scale dominates.
+
+    A pair's distances depend on that pair alone: nothing is learned from the fitted
+    graphs but the graphs themselves, so the stack of all the samples, sliced, gives
+    every fold's (a cross-validation of a pairwise estimator does that slicing).
+
+    Parameters
+    ----------
+    n_directions : int, default=10
+        Lines of the sliced Wasserstein distance.
+    wl_iterations : int, default=3
+        Weisfeiler-Lehman iterations after the degrees.
+    n_jobs : int, default=None
+        Parallel jobs of the persistence and the distances (joblib).
+
+    Attributes
+    ----------
+    n_positions_ : int
+        The last axis of the output: the diagrams, then the patterns and the features.
+    n_features_in_ : int
+        Number of fitted graphs.
+
+    See Also
+    --------
+    KernelSumSVC : The classifier of these stacks.
+    make_graph_classifier : ``make_graph_classifier(classifier="kernels")`` chains the
+        eigen stage, this and :class:`KernelSumSVC`.
+    """
+
+    _sample_kind = "graph fields"
+    _parameter_constraints = {
+        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "wl_iterations": [Interval(Integral, 0, 100, closed="both")],
+        "n_jobs": [Integral, None],
+    }
+
+    def __init__(self, n_directions=10, wl_iterations=3, n_jobs=None):
+        self.n_directions = n_directions
+        self.wl_iterations = wl_iterations
+        self.n_jobs = n_jobs
+
+    def _describe(self, X, fitting: bool):
+        """Diagrams, features and pattern counts of the graph fields ``X``."""
+        if fitting:
+            self.graph_ = GraphFeatures().fit(X)
+            self.persistence_ = LowerStarPersistence(filtration="extended", n_jobs=self.n_jobs)
+            diagrams = self.persistence_.fit_transform(X)
+            self.statistics_ = DiagramStatistics(n_jobs=self.n_jobs).fit(diagrams)
+        else:
+            diagrams = self.persistence_.transform(X)
+        features = np.hstack([self.statistics_.transform(diagrams), self.graph_.transform(X)])
+        patterns = [_pattern_counts(field, self.wl_iterations) for field in X]
+        return diagrams, features, patterns
+
+    def _stack(self, sliced, features, patterns):
+        canberra = np.nan_to_num(cdist(features, self.features_, "canberra"))
+        parts = [sliced, _pattern_distances(patterns, self.patterns_), canberra]
+        return np.dstack(parts)
+
+    def fit(self, X, y=None):
+        """Store the diagrams, features and patterns of the graph fields ``X`` (from
+        :class:`LaplacianEigenTransformer`); ``y`` is ignored. Returns ``self``."""
+        diagrams = self._fit(X)
+        self._fitted(self.sliced_.fit(diagrams))
+        return self
+
+    def _fit(self, X):
+        self._check_params()
+        X = GraphFeatures()._fields(X)
+        diagrams, self.features_, self.patterns_ = self._describe(X, fitting=True)
+        self.sliced_ = PerDiagramDistance(n_directions=self.n_directions, n_jobs=self.n_jobs)
+        self.n_features_in_ = len(X)
+        return diagrams
+
+    def _fitted(self, sliced):
+        self.n_positions_ = self.sliced_.n_diagrams_ + 2
+        return sliced
+
+    def fit_transform(self, X, y=None):
+        """Fit, and return the symmetric stack of the fitted graphs.
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_samples, n_positions_)
+        """
+        diagrams = self._fit(X)
+        sliced = self._fitted(self.sliced_.fit_transform(diagrams))
+        return self._stack(sliced, self.features_, self.patterns_)
+
+    def transform(self, X):
+        """The distances of each graph of ``X`` to each fitted graph.
+
+        Parameters
+        ----------
+        X : sequence of ScalarField
+            Graph fields with as many signatures as the fitted ones.
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_fitted, n_positions_)
+        """
+        check_is_fitted(self, "n_positions_")
+        X = self.graph_._fields(X, self.graph_.n_functions_)
+        diagrams, features, patterns = self._describe(X, fitting=False)
+        return self._stack(self.sliced_.transform(diagrams), features, patterns)

@@ -1,0 +1,157 @@
+"""The kernel classifier of graphs: GraphPairDistances, KernelSumSVC and
+make_graph_classifier(classifier="kernels")."""
+
+import pickle
+
+import numpy as np
+import pytest
+from conftest import data_folder
+from sklearn.base import clone
+from sklearn.model_selection import KFold, cross_val_score, cross_validate
+from test_graph_learning import cycle, eigen, star
+from test_sklearn_checks import CHECKS_WITHOUT_DATA
+
+from sklearn_meshph import load_tu_dataset, make_graph_classifier
+from sklearn_meshph.vectorization import GraphPairDistances, KernelSumSVC
+
+
+def path(n):
+    return n, np.array([[i, i + 1] for i in range(n - 1)])
+
+
+def fields(graphs):
+    return eigen().fit_transform(graphs)
+
+
+@pytest.fixture(scope="module")
+def graphs():
+    sizes = range(5, 13)
+    samples = [f(n) for f in (cycle, path, star) for n in sizes]
+    return samples, np.repeat([0, 1, 2], len(sizes))
+
+
+def test_pair_distances_depend_on_the_pair_alone(graphs):
+    X = fields(graphs[0])
+    stack = GraphPairDistances().fit_transform(X)
+    assert stack.shape == (len(X), len(X), 4 * 2 + 2)  # 4 kinds x 2 times, patterns, features
+    np.testing.assert_allclose(stack, stack.transpose(1, 0, 2), atol=1e-12)
+    np.testing.assert_allclose(stack[np.arange(len(X)), np.arange(len(X))], 0.0, atol=1e-12)
+    part = GraphPairDistances().fit(X[:10])
+    np.testing.assert_allclose(part.transform(X[10:]), stack[10:, :10], atol=1e-12)
+    assert part.n_positions_ == 10 and part.n_features_in_ == 10
+
+
+def test_pattern_distance_of_relabelled_and_different_graphs():
+    n, edges = cycle(7)
+    order = np.random.default_rng(0).permutation(n)
+    relabelled = (n, order[edges])
+    stack = GraphPairDistances(wl_iterations=2).fit_transform(
+        fields([cycle(7), relabelled, path(7), star(7)])
+    )
+    patterns = stack[:, :, -2]
+    assert patterns[0, 1] == pytest.approx(0.0, abs=1e-12)  # the same graph
+    assert patterns[0, 2] > 0 and patterns[0, 3] == pytest.approx(2.0)  # no degree shared
+    assert 0 < patterns[0, 2] < 2  # a path's inner nodes look like a cycle's
+
+
+def separable_stack(n=40, seed=0):
+    """Position 0 is noise, position 1 separates the two classes."""
+    rng = np.random.default_rng(seed)
+    y = np.repeat([0, 1], n // 2)
+    noise = rng.random((n, 1))
+    signal = y[:, None] + 0.1 * rng.random((n, 1))
+    stack = np.dstack([np.abs(noise - noise.T), np.abs(signal - signal.T)])  # (n, n, 2) distances
+    return stack, y
+
+
+def test_kernel_sum_chooses_the_informative_kernel():
+    stack, y = separable_stack()
+    model = KernelSumSVC(C=(1.0, 10.0)).fit(stack, y)
+    assert set(model.cv_scores_) == {(w, c) for w in [(0, 1), (1, 0), (1, 1)] for c in (1.0, 10.0)}
+    assert model.weights_.tolist() == [0.0, 1.0]  # the noise adds nothing but errors
+    assert model.score(stack, y) == 1.0
+    assert model.n_features_in_ == len(y) and model.scales_.shape == (2,)
+    grouped = KernelSumSVC(groups=[0, 0]).fit(stack, y)
+    assert list(grouped.cv_scores_) == [((1,), 1.0), ((1,), 10.0), ((1,), 100.0)]
+
+
+def test_kernel_sum_clone_pickle_params():
+    stack, y = separable_stack()
+    model = KernelSumSVC(groups=(0, 1), cv=3, random_state=4)
+    assert clone(model).get_params()["random_state"] == 4
+    assert model.set_params(cv=4).cv == 4
+    model.fit(stack, y)
+    again = pickle.loads(pickle.dumps(model))
+    np.testing.assert_array_equal(again.decision_function(stack), model.decision_function(stack))
+
+
+def test_kernel_sum_chooses_on_a_subset_of_large_training_sets():
+    stack, y = separable_stack(n=60)
+    model = KernelSumSVC(max_selection_samples=20, cv=2).fit(stack, y)
+    assert model.score(stack, y) == 1.0  # the SVM kept is fitted on all 60
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda s: s.__setitem__((3, 1, 0), np.nan), "sample 3: distance nan"),
+        (lambda s: s.__setitem__((5, 2, 1), -1.0), "sample 5: distance -1.0"),
+    ],
+)
+def test_kernel_sum_refuses_bad_distances_naming_the_sample(change, message):
+    stack, y = separable_stack()
+    bad = stack.copy()
+    change(bad)
+    with pytest.raises(ValueError, match=message):
+        KernelSumSVC().fit(bad, y)
+    model = KernelSumSVC().fit(stack, y)
+    with pytest.raises(ValueError, match=message):
+        model.predict(bad)
+    with pytest.raises(ValueError, match="expected 40"):
+        model.predict(stack[:, :30])
+
+
+def test_kernel_sum_refuses_bad_parameters():
+    stack, y = separable_stack()
+    with pytest.raises(ValueError, match="groups must give an int to each of the 2"):
+        KernelSumSVC(groups=[0]).fit(stack, y)
+    with pytest.raises(ValueError, match="C must be a non-empty sequence"):
+        KernelSumSVC(C=(1.0, 0.0)).fit(stack, y)
+    with pytest.raises(ValueError, match="fewer than the cv=5"):
+        KernelSumSVC().fit(stack[:4, :4], y[:4])
+
+
+def test_kernel_classifier_of_graphs(graphs):
+    X, y = graphs
+    model = make_graph_classifier(classifier="kernels", times=(0.1, 10.0))
+    assert list(model.named_steps) == ["eigen", "distances", "classifier"]
+    assert model.get_params()["classifier__groups"] == (0,) * 8 + (1, 2)
+    cv = KFold(4, shuffle=True, random_state=0)
+    scores = cross_val_score(model, X, y, cv=cv)
+    assert scores.mean() > 0.9
+    # The distances learn nothing from the training graphs: the stack of all the
+    # graphs, sliced by the folds, gives the same predictions as the pipeline per fold.
+    stack = model[:-1].fit_transform(X)
+    sliced = cross_validate(clone(model[-1]), stack, y, cv=cv)["test_score"]
+    np.testing.assert_array_equal(sliced, scores)
+    fitted = pickle.loads(pickle.dumps(clone(model).fit(X, y)))
+    assert fitted.predict([cycle(14), path(14), star(14)]).tolist() == [0, 1, 2]
+
+
+def test_kernel_classifier_refuses_an_unknown_classifier():
+    with pytest.raises(ValueError, match="classifier"):
+        make_graph_classifier(classifier="svm")
+
+
+def test_mutag_kernel_accuracy_floor():
+    graphs, y = load_tu_dataset(data_folder("tu/MUTAG", "TU MUTAG"))
+    model = make_graph_classifier(classifier="kernels")
+    stack = model[:-1].fit_transform(graphs)
+    scores = cross_val_score(model[-1], stack, y, cv=KFold(5, shuffle=True, random_state=0))
+    assert scores.mean() > 0.8
+
+
+@pytest.mark.parametrize("estimator", [GraphPairDistances(), KernelSumSVC()], ids=repr)
+@pytest.mark.parametrize("check", CHECKS_WITHOUT_DATA, ids=lambda c: c.__name__)
+def test_conventions_of_the_kernel_estimators(estimator, check):
+    check(type(estimator).__name__, clone(estimator))
