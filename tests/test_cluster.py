@@ -80,6 +80,16 @@ def test_default_pipeline_on_a_cluster_is_bitwise_the_local_run(client, meshes, 
     assert len(tasks) >= 2
 
 
+def test_default_transform_on_a_cluster_is_bitwise_the_local_run(client, meshes):
+    """The distances of new meshes to fitted ones: the parts' matrices in one call on
+    the cluster, as the local run's."""
+    expected = make_mesh_distance(n_jobs=1).fit(meshes[:4]).transform(meshes[4:])
+    with parallel_backend("dask"), distributed.get_task_stream(client) as stream:
+        found = make_mesh_distance(n_jobs=-1).fit(meshes[:4]).transform(meshes[4:])
+    np.testing.assert_array_equal(found, expected)
+    assert len(stream.data) >= 2
+
+
 def test_eigen_cache_in_a_shared_folder_is_written_by_the_workers(client, meshes, local, tmp_path):
     matrix, _ = on_cluster(client, meshes, memory=tmp_path)
     np.testing.assert_array_equal(matrix, local)
