@@ -59,9 +59,13 @@ def evaluate(graphs, y, repeats, n_jobs, options, scores, leaves):
     model = make_graph_classifier(n_jobs=n_jobs, **options)
     features = model[:-1].fit_transform(graphs)
     final = model[-1]
+    # The forest's trees run in parallel already; the kernel SVM's folds do.
+    folds_jobs = n_jobs if options["classifier"] == "kernels" else None
     for seed in range(repeats):
         cv = KFold(10, shuffle=True, random_state=seed)
-        result = cross_validate(clone(final), features, y, cv=cv, return_estimator=True)
+        result = cross_validate(
+            clone(final), features, y, cv=cv, return_estimator=True, n_jobs=folds_jobs
+        )
         scores.append(100 * result["test_score"].mean())
         leaves += [choice(fitted) for fitted in result["estimator"]]
 
