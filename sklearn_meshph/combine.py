@@ -50,9 +50,11 @@ def _part_plan(part, X, fit: bool):
         step = part.steps[-1][1]
         if not isinstance(step, PairwiseTransformer):
             step = part
-        elif len(part.steps) > 1:
-            head = part[:-1]  # a Pipeline of the same step objects
-            X = head.fit_transform(X) if fit else head.transform(X)
+        else:  # the steps before it, as the pipeline runs them (a slice of it would
+            # be a new Pipeline, not fitted in the eyes of check_is_fitted)
+            for _, head in part.steps[:-1]:
+                if head is not None and head != "passthrough":
+                    X = head.fit_transform(X) if fit else head.transform(X)
     return fit_transform_plan(step, X) if fit else transform_plan(step, X)
 
 
