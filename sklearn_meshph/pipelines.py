@@ -48,9 +48,10 @@ __all__ = [
 _KINDS = {"ord1": 1.0, "ext0": 0.5, "ext1": 1.0}
 _DNA_WEIGHT = 0.5
 # The signature's eigenpairs, and the spectrum's (the constant pair included): the
-# values cross-validation chose (docs/learning.md).
-_EIGENPAIRS = 56
-_DNA_EIGENPAIRS = 50
+# fewest at which cross-validation on watertight_dev keeps the accuracy of the 56 and
+# 50 chosen first (docs/learning.md, docs/scale.md), one solve of 48 for both.
+_EIGENPAIRS = 48
+_DNA_EIGENPAIRS = 48
 _SCALES = 5
 # The linear-cost preset: landscapes per diagram and their grid points (docs/scale.md).
 _LANDSCAPES = 5
@@ -316,11 +317,11 @@ def make_mesh_distance(preset="default", *, memory=None, n_jobs=None, random_sta
         - ``"default"``: the library's best invariant configuration, chosen by
           cross-validation on the development half of SHREC'07 Watertight. The
           scale-invariant heat kernel signature ``log(HKS / heat trace)`` at 5 times
-          from 56 eigenpairs, its extended persistence split by kind (ordinary
+          from 48 eigenpairs, its extended persistence split by kind (ordinary
           superlevel pairs, the components' ranges, the essential H1 classes of closed
           surfaces), 1-Wasserstein distances with each time's distance divided by its
           median (the persistence of the signature shrinks with the time), the kinds
-          and the Shape-DNA spectrum of the first 50 eigenpairs added with weights 1,
+          and the Shape-DNA spectrum of the first 48 eigenpairs added with weights 1,
           0.5, 1 and 0.5 after median normalization (:class:`CombinedDistance`).
         - ``"eigenfunctions"``: the three estimators at their own defaults
           (eigenfunctions 1-3, version 0.1's pipeline); ``"0.1"``, its former name, is
@@ -391,7 +392,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
     for each extended diagram kind (``"ord1"``, ``"ext0"``, ``"ext1"``), the first 5
     persistence landscapes of each time's diagram on a grid of 20 points learned by
     ``fit`` (:class:`PersistenceLandscape`), and the logarithm of the Shape-DNA
-    spectrum (the 49 non-zero eigenvalues: differences of logarithms are relative
+    spectrum (the 47 non-zero eigenvalues: differences of logarithms are relative
     differences, as Canberra's are). Each part, and each time within a part, is scaled
     to a root-mean-square distance of 1 among the fitted meshes (:class:`DistanceScaler`,
     one pass over the rows), and the parts are weighted by the square roots of the
@@ -423,7 +424,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
     -------
     sklearn.pipeline.Pipeline
         A transformer: ``fit_transform(meshes)`` returns an array of shape
-        ``(n_meshes, 1549)`` (3 kinds x 5 times x 5 landscapes x 20 points, and 49
+        ``(n_meshes, 1547)`` (3 kinds x 5 times x 5 landscapes x 20 points, and 47
         eigenvalues).
 
     See Also

@@ -15,7 +15,7 @@ from sklearn.preprocessing import StandardScaler
 
 from sklearn_meshph import DistanceScaler, make_mesh_distance, make_mesh_features, make_shapes
 
-N_FEATURES = 3 * 5 * 5 * 20 + 49  # kinds x times x landscapes x grid points, eigenvalues
+N_FEATURES = 3 * 5 * 5 * 20 + 47  # kinds x times x landscapes x grid points, eigenvalues
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +48,7 @@ def test_the_features_are_named_and_go_out_as_a_data_frame(fitted):
     meshes, _, pipe, X = fitted
     names = pipe.get_feature_names_out()
     assert names.shape == (N_FEATURES,) and len(set(names)) == N_FEATURES
-    assert names[0] == "ord1__d0_landscape1_0" and names[-1] == "dna__eigenvalue_49"
+    assert names[0] == "ord1__d0_landscape1_0" and names[-1] == "dna__eigenvalue_47"
     frame = clone(pipe).set_output(transform="pandas").fit_transform(meshes[:12])
     assert list(frame.columns) == list(names)
     np.testing.assert_array_equal(frame.to_numpy(), X)

@@ -66,9 +66,10 @@ _RELATIVE_SHIFT = 1e-2
 # The Lanczos run stops when every Ritz pair's residual is below this share of its Ritz
 # value (ARPACK's criterion): the eigenpairs then agree to rounding with ARPACK's to
 # machine precision (measured in docs/scale.md), in at most _MAX_STEPS_RATIO times the
-# eigenpairs solves (about 2.4 times are needed) before ARPACK takes over.
+# eigenpairs solves (about 2.4 times are needed; 4.3 for the clustered spectra of two
+# watertight_dev meshes at 48 eigenpairs) before ARPACK takes over.
 _TOLERANCE = 1e-8
-_MAX_STEPS_RATIO = 4
+_MAX_STEPS_RATIO = 5
 _MIN_BASIS = 20
 # Whether the Lanczos run (with its inertia check) comes first, on our Cholesky factor
 # (the "superlu" backend, a check, always goes to ARPACK); False: ARPACK alone, at
