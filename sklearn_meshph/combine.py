@@ -18,6 +18,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from ._base import median_scale
 from ._param_validation import Interval, Options, check_params
 from .diagrams.pairwise import PairwiseTransformer, fit_transform_plan, run_plans, transform_plan
+from .persistence import LowerStarPersistence
 
 __all__ = ["CombinedDistance", "FeatureDistance"]
 
@@ -38,24 +39,105 @@ def _reusable(X):
     return np.asarray(X) if hasattr(X, "__array__") else list(X)
 
 
-def _part_plan(part, X, fit: bool):
+def _plain(part) -> bool:
+    """Whether ``part`` is a :class:`~sklearn.pipeline.Pipeline` whose steps may run
+    apart (no memory, verbose or transform_input)."""
+    plain = isinstance(part, Pipeline) and part.memory is None and not part.verbose
+    return plain and getattr(part, "transform_input", None) is None
+
+
+def _part_plan(part, X, fit: bool, first: int = 0):
     """``part.fit_transform(X)`` (``fit``) or ``part.transform(X)`` as a
     :class:`~sklearn_meshph.diagrams.pairwise.MatrixPlan`: the matrices of a diagram
     distance, alone or ending a :class:`~sklearn.pipeline.Pipeline` (without memory,
-    verbose or transform_input, whose steps before it run now, fitted in place), are
-    left to the plan; any other part computes its output now."""
+    verbose or transform_input, whose steps before it run now, fitted in place, from
+    the ``first``: ``X`` is the output of those before), are left to the plan; any
+    other part computes its output now."""
     step = part
-    plain = isinstance(part, Pipeline) and part.memory is None and not part.verbose
-    if plain and getattr(part, "transform_input", None) is None:
+    if _plain(part):
         step = part.steps[-1][1]
         if not isinstance(step, PairwiseTransformer):
             step = part
         else:  # the steps before it, as the pipeline runs them (a slice of it would
             # be a new Pipeline, not fitted in the eyes of check_is_fitted)
-            for _, head in part.steps[:-1]:
+            for _, head in part.steps[first:-1]:
                 if head is not None and head != "passthrough":
                     X = head.fit_transform(X) if fit else head.transform(X)
     return fit_transform_plan(step, X) if fit else transform_plan(step, X)
+
+
+def _persistence_settings(part):
+    """The settings, all but ``parts``, of the :class:`LowerStarPersistence` that starts
+    ``part`` when its diagrams may come from a persistence shared with other parts (a
+    plain Pipeline ending with a diagram distance); else None."""
+    if not (_plain(part) and len(part.steps) > 1):
+        return None
+    first, last = part.steps[0][1], part.steps[-1][1]
+    if type(first) is not LowerStarPersistence or not isinstance(last, PairwiseTransformer):
+        return None
+    return {k: v for k, v in first.get_params(deep=False).items() if k != "parts"}
+
+
+def _persistence_groups(parts) -> list[list[int]]:
+    """The positions of the parts that start with a :class:`LowerStarPersistence` of
+    equal settings but ``parts``, per settings, where at least two share them."""
+    groups: list[tuple[dict, list[int]]] = []
+    for position, part in enumerate(parts):
+        settings = _persistence_settings(part)
+        if settings is None:
+            continue
+        group = next((g for s, g in groups if s == settings), None)
+        if group is None:
+            groups.append((settings, [position]))
+        else:
+            group.append(position)
+    return [group for _, group in groups if len(group) > 1]
+
+
+def _split(diagrams, positions, n_kept):
+    """One part's diagrams of a sample out of those of the union of the parts' kinds
+    (``n_kept`` per function, function-major): the union's ``positions`` of each
+    function, one array alone or a tuple, as its own persistence makes them."""
+    union = diagrams if isinstance(diagrams, tuple) else (diagrams,)
+    own = [union[f + k] for f in range(0, len(union), n_kept) for k in positions]
+    return own[0] if len(own) == 1 else tuple(own)
+
+
+def _shared_diagrams(steps, X, fit: bool) -> list:
+    """The output of each :class:`LowerStarPersistence` of ``steps`` (equal settings
+    but ``parts``) on ``X``, from one persistence of the union of their diagrams: each
+    function's diagrams are computed once for all (``fit``: each step is fitted on
+    ``X`` first, as its own ``fit_transform`` would, and refuses its own ``parts``)."""
+    if fit:
+        for step in steps:
+            step.fit(X)
+    names = [step.diagram_names() for step in steps]
+    union = clone(steps[0]).set_params(parts=None)
+    union_names = [name for name in union.diagram_names() if any(name in n for n in names)]
+    diagrams = union.set_params(parts=tuple(union_names)).transform(X)
+    return [
+        [
+            _split(sample, [union_names.index(name) for name in own], len(union_names))
+            for sample in diagrams
+        ]
+        for own in names
+    ]
+
+
+def _plans(parts, X, fit: bool) -> list:
+    """The :class:`~sklearn_meshph.diagrams.pairwise.MatrixPlan` of every part on
+    ``X``: those that start with a :class:`LowerStarPersistence` of equal settings but
+    ``parts`` run one persistence for all of them, then their steps after it."""
+    outputs = {}
+    for group in _persistence_groups(parts):
+        steps = [parts[position].steps[0][1] for position in group]
+        outputs.update(zip(group, _shared_diagrams(steps, X, fit), strict=True))
+    return [
+        _part_plan(part, outputs[position], fit, first=1)
+        if position in outputs
+        else _part_plan(part, X, fit)
+        for position, part in enumerate(parts)
+    ]
 
 
 class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
@@ -252,9 +334,13 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     and the parts' own (``<name>__<parameter>``), so that nested parameters reach the
     parts given in the same call. The parts' diagram distances (a
     :class:`DiagramDistance`, alone or ending a :class:`~sklearn.pipeline.Pipeline`)
-    are computed together, in one parallel call after the steps before them. The
-    output's columns are named ``combineddistance0``, ``combineddistance1``... after
-    the fitted samples (:meth:`get_feature_names_out`).
+    are computed together, in one parallel call after the steps before them. Parts
+    that start with a :class:`LowerStarPersistence` of equal settings but ``parts``
+    (Pipelines without memory or verbose) share one persistence per sample: each
+    function's diagrams are computed once, and each part gets its own, as its
+    persistence would have made them. The output's columns are named
+    ``combineddistance0``, ``combineddistance1``... after the fitted samples
+    (:meth:`get_feature_names_out`).
 
     Examples
     --------
@@ -377,8 +463,9 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         X = _reusable(X)  # every part reads X: a generator is read once
         parts = [(name, clone(part)) for name, part in self.transformer_list]
         # Every part's diagram distances are computed in one parallel call, after the
-        # steps before them: one wait for the last block, not one per part.
-        matrices = run_plans([_part_plan(part, X, fit=True) for _, part in parts])
+        # steps before them (one persistence for the parts that differ only by the
+        # diagrams they keep): one wait for the last block, not one per part.
+        matrices = run_plans(_plans([part for _, part in parts], X, fit=True))
         self.parts_, self.weights_ = parts, weights
         self.scales_ = {
             name: median_scale(matrix) if self.normalization == "median" else 1.0
@@ -418,7 +505,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         check_is_fitted(self, "parts_")
         X = _reusable(X)
-        return self._combine(run_plans([_part_plan(part, X, fit=False) for _, part in self.parts_]))
+        return self._combine(run_plans(_plans([part for _, part in self.parts_], X, fit=False)))
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
