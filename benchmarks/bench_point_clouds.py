@@ -26,7 +26,7 @@ is 40% of the spacing of 20,000 points): every operator then sees more area and 
 eigenvalues; that is geometry, not a defect of one operator.
 
 With ``--pipeline`` (after the sphere table) or ``--pipeline-only``: the time per sample
-of the default pipeline's eigen stage (``make_mesh_distance()``: 56 eigenpairs, log-HKS
+of the default pipeline's eigen stage (``make_mesh_distance()``: 48 eigenpairs, log-HKS
 at 5 times) and of its persistence (``LowerStarPersistence(filtration="extended")``) on
 a mesh and on the cloud of its vertices (same vertex count: the cloud's operator and
 kNN graph against the mesh's cotangent operator and edges), one process, ``n_jobs=1``,
@@ -155,7 +155,7 @@ def pipeline_table(n_watertight):
     persistence.fit_transform(eigen.fit_transform(warm))  # numba compilation, once
     persistence.fit_transform(eigen.fit_transform([np.asarray(warm[0].vertices)]))
     print(
-        "\nThe default pipeline's eigen stage (56 eigenpairs, log-HKS) and extended "
+        "\nThe default pipeline's eigen stage (48 eigenpairs, log-HKS) and extended "
         "persistence,\nper sample, n_jobs=1: a mesh against the point cloud of its "
         "vertices\n"
     )
