@@ -9,7 +9,6 @@ from conftest import data_folder
 from sklearn.base import clone
 from sklearn.model_selection import KFold, cross_val_score, cross_validate
 from test_graph_learning import cycle, eigen, star
-from test_sklearn_checks import CHECKS_WITHOUT_DATA
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
 from sklearn_meshph.vectorization import GraphPairDistances, KernelSumSVC
@@ -149,9 +148,3 @@ def test_mutag_kernel_accuracy_floor():
     stack = model[:-1].fit_transform(graphs)
     scores = cross_val_score(model[-1], stack, y, cv=KFold(5, shuffle=True, random_state=0))
     assert scores.mean() > 0.8
-
-
-@pytest.mark.parametrize("estimator", [GraphPairDistances(), KernelSumSVC()], ids=repr)
-@pytest.mark.parametrize("check", CHECKS_WITHOUT_DATA, ids=lambda c: c.__name__)
-def test_conventions_of_the_kernel_estimators(estimator, check):
-    check(type(estimator).__name__, clone(estimator))

@@ -102,6 +102,9 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.input_tags.pairwise = True
+        # A stack of distances (as DistanceKernel's input), not rows of features.
+        tags.input_tags.two_d_array = False
+        tags.input_tags.three_d_array = True
         return tags
 
     def _stack(self, X, n_fitted=None) -> np.ndarray:
