@@ -140,12 +140,11 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         return np.unique(groups, return_inverse=True)[1]
 
     def _kernels(self, X) -> np.ndarray:
-        """The ``(n, m, n_groups)`` kernels of the groups."""
-        two_var = 2.0 * self.bandwidth**2 * self.scales_
-        kernels = np.zeros(X.shape[:2] + (self.n_groups_,))
-        for k, group in enumerate(self.group_of_):
-            kernels[:, :, group] += np.exp(-X[:, :, k] / two_var[k])
-        return kernels / np.bincount(self.group_of_)
+        """The ``(n, m, n_groups)`` kernels of the groups (one pass over the stack)."""
+        average = np.zeros((len(self.group_of_), self.n_groups_))
+        average[np.arange(len(self.group_of_)), self.group_of_] = 1.0
+        average /= np.bincount(self.group_of_)
+        return np.exp(X / (-2.0 * self.bandwidth**2 * self.scales_)) @ average
 
     def fit(self, X, y):
         """Choose the kernels and ``C`` by internal cross-validation, fit the SVM.
