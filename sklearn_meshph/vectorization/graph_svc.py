@@ -223,3 +223,19 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         ndarray of shape (n_samples,)
         """
         return self.svc_.predict(self._kernel(X))
+
+    def score(self, X, y, sample_weight=None):
+        """Mean accuracy of ``predict(X)`` against ``y``.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_fitted, n_positions) or (n, n_fitted)
+            Distances to the training samples.
+        y : array-like of shape (n_samples,)
+        sample_weight : array-like of shape (n_samples,), default=None
+
+        Returns
+        -------
+        float
+        """
+        return super().score(X, y, sample_weight=sample_weight)
