@@ -225,17 +225,6 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         return self.svc_.predict(self._kernel(X))
 
     def score(self, X, y, sample_weight=None):
-        """Mean accuracy of ``predict(X)`` against ``y``.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_samples, n_fitted, n_positions) or (n, n_fitted)
-            Distances to the training samples.
-        y : array-like of shape (n_samples,)
-        sample_weight : array-like of shape (n_samples,), default=None
-
-        Returns
-        -------
-        float
-        """
+        """Mean accuracy of ``predict(X)`` against ``y`` (weighted by ``sample_weight``),
+        ``X`` the distances to the training samples, as for :meth:`predict`."""
         return super().score(X, y, sample_weight=sample_weight)
