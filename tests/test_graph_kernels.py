@@ -118,6 +118,11 @@ def test_kernel_sum_refuses_bad_parameters():
         KernelSumSVC(C=(1.0, 0.0)).fit(stack, y)
     with pytest.raises(ValueError, match="fewer than the cv=5"):
         KernelSumSVC().fit(stack[:4, :4], y[:4])
+    # A bandwidth whose square under- or overflows made NaN kernels or an OverflowError.
+    for bandwidth in (1e-300, 1e300, np.inf):
+        with pytest.raises(ValueError, match="'bandwidth' parameter of KernelSumSVC"):
+            KernelSumSVC(bandwidth=bandwidth).fit(stack, y)
+    assert KernelSumSVC(bandwidth=1e-100).fit(stack, y).score(stack, y) == 1.0
 
 
 def test_kernel_classifier_of_graphs(graphs):

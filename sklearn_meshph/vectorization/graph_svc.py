@@ -16,6 +16,7 @@ from sklearn.utils.validation import check_is_fitted, check_random_state
 
 from .._base import median_scale
 from .._param_validation import Interval, check_params
+from ._base import BANDWIDTH
 
 __all__ = ["KernelSumSVC"]
 
@@ -76,7 +77,7 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
 
     _parameter_constraints = {
         "groups": [tuple, list, np.ndarray, None],
-        "bandwidth": [Interval(Real, 0, None, closed="neither")],
+        "bandwidth": BANDWIDTH,
         "C": [tuple, list],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "max_selection_samples": [Interval(Integral, 2, None, closed="left")],
