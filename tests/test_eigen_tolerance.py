@@ -237,3 +237,16 @@ def test_clustered_spectra_converge_without_arpack(watertight_dir, name, monkeyp
     monkeypatch.setattr(eigensolver, "_LANCZOS", False)
     expected, _ = generalized_eigenpairs(L, M, _EIGENPAIRS, points=mesh.vertices)
     np.testing.assert_allclose(values[1:], expected[1:], rtol=1e-10)
+
+
+@pytest.mark.parametrize("size", [1e-12, 1e-30, 1e30])
+def test_the_spectrum_does_not_depend_on_the_mesh_size(size):
+    # With the masses of a mesh of size 1e-12, ARPACK (where the inertia count sends
+    # it) lost a copy of the threefold eigenvalue l(l + 1) = 2 of the sphere.
+    mesh = trimesh.creation.icosphere(4)
+    L, M = cotangent_laplacian(mesh.vertices, np.asarray(mesh.faces))
+    reference, _ = generalized_eigenpairs(L, M, 10, points=mesh.vertices)
+    L, M = cotangent_laplacian(mesh.vertices * size, np.asarray(mesh.faces))
+    values, vectors = generalized_eigenpairs(L, M, 10, points=mesh.vertices * size)
+    np.testing.assert_allclose(values[1:] * size**2, reference[1:], rtol=1e-9)
+    np.testing.assert_allclose((vectors.T * M.diagonal()) @ vectors, np.eye(10), atol=1e-9)

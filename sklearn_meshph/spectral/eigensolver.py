@@ -84,6 +84,15 @@ _BOUNDARY_RTOL = 1e-6
 _NULL_RTOL = 1e-12
 
 
+def _unit_trace_factor(mass: np.ndarray) -> float:
+    """The power of two that brings ``sum(mass)`` nearest to 1 on a log scale (1 for a
+    unit-area mesh, or when the sum is not a positive finite number)."""
+    total = float(np.sum(mass))
+    if not (np.isfinite(total) and total > 0):
+        return 1.0
+    return float(np.ldexp(1.0, -round(np.log2(total))))
+
+
 def eigen_shift(L: sp.spmatrix, M: sp.spmatrix) -> float:
     """A negative shift well below the first non-zero eigenvalue, free of scale and size.
 
@@ -249,6 +258,11 @@ def generalized_eigenpairs(
     # thread count (bitwise), and ARPACK's many small BLAS calls are not slowed down by
     # threads (several times slower on a busy machine).
     with one_blas_thread():
+        # The pencil is solved with M at unit trace, scaled by a power of two (exact, so
+        # the vectors are the same and the eigenvalues scale back exactly): ARPACK lost
+        # copies of repeated eigenvalues with the masses of a mesh of size 1e-6.
+        unit = _unit_trace_factor(mass)
+        M = M * unit
         values = vectors = None
         sigma = eigen_shift(L, M)
         # sigma = 0: no edge at all, every eigenvalue 0, which Lanczos cannot separate.
@@ -260,9 +274,9 @@ def generalized_eigenpairs(
             if values is None:
                 values, vectors = _shift_invert(L, M, sigma, op, v0, n_eigenpairs)
         if values is None:
-            values, vectors = dense_eigenpairs(L, mass, n_eigenpairs)
+            values, vectors = dense_eigenpairs(L, M.diagonal(), n_eigenpairs)
     # L is positive semi-definite: a negative eigenvalue can only be rounding.
-    values = np.maximum(values, 0.0)
+    values = np.maximum(values, 0.0) * unit
     vectors = vectors / np.sqrt(np.einsum("i,ij,ij->j", mass, vectors, vectors))
     # C order, as the cache stores them: a cached solve gives the same bits downstream.
     return values, np.ascontiguousarray(fix_signs(vectors, mass))
