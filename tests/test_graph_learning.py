@@ -260,3 +260,78 @@ def test_graph_features_refuse_bin_counts_that_would_exhaust_memory(params, name
     fields = eigen().fit_transform([cycle(5)])
     with pytest.raises(ValueError, match=f"'{name}' parameter of GraphFeatures"):
         GraphFeatures(**params).fit(fields)
+
+
+def resistance_row(fields, **params):
+    features = GraphFeatures(pairs=False, **params).fit(fields)
+    names = list(features.get_feature_names_out())
+    columns = [names.index(f"resistance_{k}") for k in range(features.n_resistance_bins)]
+    return features.transform(fields)[:, columns]
+
+
+def test_graph_features_resistances_of_known_graphs():
+    fields = eigen().fit_transform([cycle(6), two_paths(3), complete(5)])
+    # bins [0, 0.7), [0.7, 1.4), [1.4, 2.1]: no resistance below near an edge
+    rows = resistance_row(fields, n_resistance_bins=3, max_resistance=2.1)
+    # a hexagon: 5/6 between neighbours (6 pairs), 4/3 two apart (6), 3/2 across (3)
+    np.testing.assert_allclose(rows[0], [0.0, 12 / 15, 3 / 15])
+    # two paths of 3 nodes: 1, 1 and 2 in each; the 9 pairs across are in no bin
+    np.testing.assert_allclose(rows[1], [0.0, 4 / 15, 2 / 15])
+    # K5: 2/5 between any two nodes
+    np.testing.assert_allclose(rows[2], [1.0, 0.0, 0.0])
+    # larger resistances share the last bin
+    clipped = resistance_row(fields, n_resistance_bins=2, max_resistance=1.0)
+    np.testing.assert_allclose(clipped[1], [0.0, 6 / 15])
+    assert GraphFeatures().fit(fields).n_features_out_ == GraphFeatures(
+        n_resistance_bins=0
+    ).fit(fields).n_features_out_
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_graph_features_resistances_agree_with_networkx(seed):
+    """The histogram of networkx's resistance distances per component (the oracle),
+    on random graphs of one to three components, some with isolated nodes."""
+    nx = pytest.importorskip("networkx")
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(8, 30))
+    graph = nx.gnm_random_graph(n, int(rng.integers(n // 2, 2 * n)), seed=seed)
+    edges = np.array(graph.edges(), dtype=np.int64).reshape(-1, 2)
+    fields = eigen().fit_transform([(n, edges)])
+    expected = []
+    for nodes in nx.connected_components(graph):
+        component = graph.subgraph(nodes)
+        for i in nodes:
+            expected += [nx.resistance_distance(component, i, j) for j in nodes if j > i]
+    # both rounded to 9 decimals: resistances on a bin's edge (integers on trees) land
+    # in the bin above
+    expected = np.minimum(np.round(expected, 9), 6.0)
+    histogram = np.histogram(expected, np.linspace(0.0, 6.0, 25))[0] / (n * (n - 1) / 2)
+    row = resistance_row(fields, n_resistance_bins=24, max_resistance=6.0)[0]
+    np.testing.assert_allclose(row, histogram, atol=1e-12)
+
+
+def test_graph_features_resistances_ignore_the_order_of_the_nodes():
+    order = np.array([3, 5, 0, 4, 1, 2])
+    n, edges = spider(2)
+    fields = eigen().fit_transform([spider(2), (n, np.sort(order[edges], axis=1))])
+    rows = resistance_row(fields, n_resistance_bins=50)
+    np.testing.assert_allclose(rows[0], rows[1])
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        {"n_resistance_bins": 2**33},
+        {"n_resistance_bins": -1},
+        {"max_resistance": np.inf},
+        {"max_resistance": np.nan},
+        {"max_resistance": 1e-300},
+        {"max_resistance": 0.0},
+    ],
+)
+def test_graph_features_refuse_bad_resistance_bins(params):
+    fields = eigen().fit_transform([cycle(5)])
+    name = next(iter(params))
+    with pytest.raises(ValueError, match=f"'{name}' parameter of GraphFeatures"):
+        GraphFeatures(**{"n_resistance_bins": 5, **params}).fit(fields)
+

@@ -5,7 +5,7 @@ Weisfeiler-Lehman patterns of the degrees)."""
 
 from __future__ import annotations
 
-from numbers import Integral
+from numbers import Integral, Real
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,6 +44,9 @@ _HARMONIC_RANGE = (0.05, 50.0)
 # Dense pair matrices above this many nodes would not fit a laptop's memory.
 _MAX_PAIR_NODES = 4000
 _ZERO = 1e-8
+# Decimals kept of the effective resistances: far above the eigensolver's rounding,
+# far below the gaps between the resistances of small rings.
+_DECIMALS = 9
 # splitmix64's constants: a fixed, platform-independent hash of the pattern labels.
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX = (np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
@@ -130,6 +133,38 @@ def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
     ]
 
 
+def _resistances(adjacency) -> np.ndarray:
+    """The effective resistance between the nodes of each pair in one component (the
+    graph as a network of unit resistors): ``L+[i, i] + L+[j, j] - 2 L+[i, j]`` with
+    ``L+`` the pseudo-inverse of the combinatorial Laplacian, block by block for the
+    components (its null space is their indicator vectors)."""
+    n = adjacency.shape[0]
+    labels = connected_components(adjacency, directed=False)[1]
+    upper = np.triu_indices(n, 1)
+    same = labels[upper[0]] == labels[upper[1]]
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    eigenvalues, vectors = np.linalg.eigh(np.diag(degree) - adjacency.toarray())
+    # Eigenvalues of a unit-weight Laplacian are 0 or at least about 1/n^2.
+    keep = eigenvalues > _ZERO * max(degree.max(initial=0.0), 1.0)
+    vectors = vectors[:, keep] / np.sqrt(eigenvalues[keep])
+    gram = vectors @ vectors.T
+    diagonal = np.diag(gram)
+    resistance = diagonal[upper[0]] + diagonal[upper[1]] - 2 * gram[upper]
+    return np.maximum(resistance[same], 0.0)
+
+
+def _resistance_histogram(adjacency, n_bins: int, largest: float) -> np.ndarray:
+    """Histogram of the pairs' effective resistances in ``n_bins`` equal bins on
+    ``[0, largest]``, the last one also holding the larger values, as fractions of all
+    the pairs (pairs in different components are in no bin)."""
+    n = adjacency.shape[0]
+    n_pairs = max(n * (n - 1) // 2, 1)
+    # Rounded so that equal resistances (integers on trees, k(n-k)/n on rings: often on
+    # a bin's edge) land in the same bin whatever the order of the nodes.
+    resistance = np.minimum(np.round(_resistances(adjacency), _DECIMALS), largest)
+    return np.histogram(resistance, np.linspace(0.0, largest, n_bins + 1))[0] / n_pairs
+
+
 def _mix(labels: np.ndarray) -> np.ndarray:
     """splitmix64 of each label (uint64 arithmetic wraps around by design)."""
     with np.errstate(over="ignore"):
@@ -192,6 +227,13 @@ class GraphFeatures(SampleTransformer):
       ``L+``, in ``n_pair_bins`` log-spaced bins), as fractions of the pairs, the
       share of unreachable pairs (different components), the mean and largest hop
       distance. A spectral cousin of FGSD's histograms of spectral distances [1]_;
+    - with ``n_resistance_bins > 0``, FGSD's harmonic distance [1]_ itself: the
+      effective resistance between the nodes of each pair (the graph as a network of
+      unit resistors, from the pseudo-inverse of its combinatorial Laplacian), in
+      ``n_resistance_bins`` equal bins on ``[0, max_resistance]`` (the last one also
+      holds the larger values), as fractions of the pairs. On a tree it is the hop
+      distance; a ring makes fractions (5/6 between neighbours on a hexagon, 3/2
+      across it), so fine bins tell rings and their fusions apart;
     - with ``wl_iterations > 0``, the Weisfeiler-Lehman subtree patterns [2]_ with the
       degrees as initial labels: the degree histogram (``wl_buckets`` bins, the last
       one for the larger degrees), then for each iteration the counts of the nodes'
@@ -200,9 +242,10 @@ class GraphFeatures(SampleTransformer):
       graph always gives the same counts; on molecules the patterns stand in for the
       atom types a structure-only dataset lacks.
 
-    The graph is read as unweighted (its edges). The pair histograms cost a dense
-    eigendecomposition of each graph (cubic in its nodes) and refuse graphs of more
-    than 4000 nodes; set ``pairs=False`` for larger graphs.
+    The graph is read as unweighted (its edges). The pair and resistance histograms
+    each cost a dense eigendecomposition of each graph (cubic in its nodes) and refuse
+    graphs of more than 4000 nodes; set ``pairs=False`` and ``n_resistance_bins=0``
+    for larger graphs.
 
     Parameters
     ----------
@@ -222,6 +265,12 @@ class GraphFeatures(SampleTransformer):
     wl_buckets : int, default=64
         Bins of the degree histogram and of each iteration's hashed pattern counts (at
         most 4,096).
+    n_resistance_bins : int, default=0
+        Bins of the effective resistances' histogram; 0 leaves it out
+        (:func:`make_graph_classifier` uses 50); at most 10,000.
+    max_resistance : float, default=25.0
+        Upper end of the resistances' bins, in units of one edge's resistance (the
+        default's bins are half an edge wide); larger resistances share the last bin.
 
     Attributes
     ----------
@@ -264,10 +313,21 @@ class GraphFeatures(SampleTransformer):
         "n_pair_bins": [Interval(Integral, 2, 10_000, closed="both")],
         "wl_iterations": [Interval(Integral, 0, 100, closed="both")],
         "wl_buckets": [Interval(Integral, 2, 4096, closed="both")],
+        "n_resistance_bins": [Interval(Integral, 0, 10_000, closed="both")],
+        # Finite and far from the float limits: the bins' edges are max_resistance / k.
+        "max_resistance": [Interval(Real, 1e-6, 1e12, closed="both")],
     }
 
     def __init__(
-        self, n_bins=20, pairs=True, max_hops=20, n_pair_bins=30, wl_iterations=0, wl_buckets=64
+        self,
+        n_bins=20,
+        pairs=True,
+        max_hops=20,
+        n_pair_bins=30,
+        wl_iterations=0,
+        wl_buckets=64,
+        n_resistance_bins=0,
+        max_resistance=25.0,
     ):
         self.n_bins = n_bins
         self.pairs = pairs
@@ -275,6 +335,8 @@ class GraphFeatures(SampleTransformer):
         self.n_pair_bins = n_pair_bins
         self.wl_iterations = wl_iterations
         self.wl_buckets = wl_buckets
+        self.n_resistance_bins = n_resistance_bins
+        self.max_resistance = max_resistance
 
     def _fields(self, X, n_functions=None) -> list[ScalarField]:
         fields = self._check_samples(X)
@@ -292,10 +354,11 @@ class GraphFeatures(SampleTransformer):
                     f"sample {i}: {field.n_functions} signature columns, the fitted fields "
                     f"have {n_functions}"
                 )
-            if self.pairs and field.n_vertices > _MAX_PAIR_NODES:
+            if (self.pairs or self.n_resistance_bins) and field.n_vertices > _MAX_PAIR_NODES:
                 raise ValueError(
                     f"sample {i}: {field.n_vertices} nodes, more than the "
-                    f"{_MAX_PAIR_NODES} the pair histograms allow; set pairs=False"
+                    f"{_MAX_PAIR_NODES} the pair and resistance histograms allow; set "
+                    "pairs=False and n_resistance_bins=0"
                 )
         return fields
 
@@ -340,6 +403,12 @@ class GraphFeatures(SampleTransformer):
             parts = [_size(adjacency), _spectrum(field.spectrum, self.n_bins), _signatures(values)]
             if self.pairs:
                 parts.append(_pairs(adjacency, self.max_hops, self.n_pair_bins))
+            if self.n_resistance_bins:
+                parts.append(
+                    _resistance_histogram(
+                        adjacency, self.n_resistance_bins, float(self.max_resistance)
+                    )
+                )
             if self.wl_iterations:
                 parts.append(
                     _patterns(field.edges, field.n_vertices, self.wl_iterations, self.wl_buckets)
@@ -359,6 +428,7 @@ class GraphFeatures(SampleTransformer):
             names += [f"hops_{h}" for h in range(1, self.max_hops + 1)] + ["hops_farther"]
             names += [f"harmonic_{k}" for k in range(self.n_pair_bins)]
             names += ["unreachable_pairs", "hops_mean", "hops_max"]
+        names += [f"resistance_{k}" for k in range(self.n_resistance_bins)]
         if self.wl_iterations:
             names += [
                 f"wl{i}_{k}" for i in range(self.wl_iterations + 1) for k in range(self.wl_buckets)
