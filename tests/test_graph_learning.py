@@ -282,9 +282,10 @@ def test_graph_features_resistances_of_known_graphs():
     # larger resistances share the last bin
     clipped = resistance_row(fields, n_resistance_bins=2, max_resistance=1.0)
     np.testing.assert_allclose(clipped[1], [0.0, 6 / 15])
-    assert GraphFeatures().fit(fields).n_features_out_ == GraphFeatures(
-        n_resistance_bins=0
-    ).fit(fields).n_features_out_
+    assert (
+        GraphFeatures().fit(fields).n_features_out_
+        == GraphFeatures(n_resistance_bins=0).fit(fields).n_features_out_
+    )
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -334,4 +335,3 @@ def test_graph_features_refuse_bad_resistance_bins(params):
     name = next(iter(params))
     with pytest.raises(ValueError, match=f"'{name}' parameter of GraphFeatures"):
         GraphFeatures(**{"n_resistance_bins": 5, **params}).fit(fields)
-
