@@ -103,6 +103,15 @@ def _signatures(values: np.ndarray) -> np.ndarray:
     return np.vstack([quantiles, values.mean(axis=0), values.std(axis=0)]).T.ravel()
 
 
+def _pseudo_inverse_distances(eigenvalues, vectors, keep, upper) -> np.ndarray:
+    """``L+[i, i] + L+[j, j] - 2 L+[i, j]`` for the pairs ``upper``, ``L+`` the
+    pseudo-inverse of a Laplacian from its eigenpairs (those ``keep`` selects)."""
+    vectors = vectors[:, keep] / np.sqrt(eigenvalues[keep])
+    gram = vectors @ vectors.T
+    diagonal = np.diag(gram)
+    return diagonal[upper[0]] + diagonal[upper[1]] - 2 * gram[upper]
+
+
 def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
     """Histograms over the node pairs of the hop distance and of the harmonic distance,
     as fractions of the pairs; pairs in different components count as unreachable."""
@@ -115,11 +124,8 @@ def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
     scale = np.divide(1.0, np.sqrt(degree), out=np.zeros(n), where=degree > 0)
     laplacian = np.eye(n) - scale[:, None] * adjacency.toarray() * scale[None, :]
     eigenvalues, vectors = np.linalg.eigh(laplacian)
-    keep = eigenvalues > _ZERO
-    vectors = vectors[:, keep] / np.sqrt(eigenvalues[keep])
-    gram = vectors @ vectors.T
-    diagonal = np.diag(gram)
-    harmonic = (diagonal[:, None] + diagonal[None, :] - 2 * gram)[upper][reachable]
+    harmonic = _pseudo_inverse_distances(eigenvalues, vectors, eigenvalues > _ZERO, upper)
+    harmonic = harmonic[reachable]
     hop_edges = np.r_[np.arange(0.5, max_hops + 1), np.inf]
     harmonic_edges = np.r_[0.0, np.geomspace(*_HARMONIC_RANGE, n_bins - 1), np.inf]
     unreachable = np.count_nonzero(~reachable) / n_pairs
@@ -139,17 +145,15 @@ def _resistances(adjacency) -> np.ndarray:
     ``L+`` the pseudo-inverse of the combinatorial Laplacian, block by block for the
     components (its null space is their indicator vectors)."""
     n = adjacency.shape[0]
-    labels = connected_components(adjacency, directed=False)[1]
+    n_components, labels = connected_components(adjacency, directed=False)
     upper = np.triu_indices(n, 1)
     same = labels[upper[0]] == labels[upper[1]]
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     eigenvalues, vectors = np.linalg.eigh(np.diag(degree) - adjacency.toarray())
-    # Eigenvalues of a unit-weight Laplacian are 0 or at least about 1/n^2.
-    keep = eigenvalues > _ZERO * max(degree.max(initial=0.0), 1.0)
-    vectors = vectors[:, keep] / np.sqrt(eigenvalues[keep])
-    gram = vectors @ vectors.T
-    diagonal = np.diag(gram)
-    resistance = diagonal[upper[0]] + diagonal[upper[1]] - 2 * gram[upper]
+    # Exactly one zero eigenvalue per component: no threshold to mistake a small
+    # positive eigenvalue (a long path's is about 1/n^2) for one.
+    keep = np.arange(n) >= n_components
+    resistance = _pseudo_inverse_distances(eigenvalues, vectors, keep, upper)
     return np.maximum(resistance[same], 0.0)
 
 
@@ -266,8 +270,8 @@ class GraphFeatures(SampleTransformer):
         Bins of the degree histogram and of each iteration's hashed pattern counts (at
         most 4,096).
     n_resistance_bins : int, default=0
-        Bins of the effective resistances' histogram; 0 leaves it out
-        (:func:`make_graph_classifier` uses 50); at most 10,000.
+        Bins of the effective resistances' histogram; 0 (the default, and
+        :func:`make_graph_classifier`'s) leaves it out; at most 10,000.
     max_resistance : float, default=25.0
         Upper end of the resistances' bins, in units of one edge's resistance (the
         default's bins are half an edge wide); larger resistances share the last bin.
