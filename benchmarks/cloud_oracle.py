@@ -1,0 +1,186 @@
+"""Where clouds lose accuracy against their meshes (issue 27): resolution, sampling,
+stiffness or mass.
+
+    python benchmarks/cloud_oracle.py [--collection sumner] [--points 3000] [--per-class N]
+
+Four inputs go through ``make_mesh_distance()`` (every mesh row without essential H1,
+which no cloud has), scored by leave-one-out 1-NN per part of the distance (``ord1``,
+``ext0``, Shape-DNA, and all of them):
+
+- the meshes;
+- the meshes **decimated** to about ``--points`` vertices (quadric edge collapse,
+  ``trimesh.simplify_quadric_decimation``): the resolution of the clouds;
+- the decimated meshes' **vertices as clouds**: the same points, without the faces;
+- **uniform clouds** of ``--points`` points (``sample_point_cloud``, seed = the mesh's
+  index, as ``learning_quality.py``).
+
+Then the operator alone, on the decimated vertices: the Shape-DNA (first 48 eigenvalues
+times the area, Canberra distance, leave-one-out 1-NN) of the pencil ``(L, M)`` built
+five ways: the mesh's cotangent stiffness and mass; ours (``point_cloud_laplacian``);
+robust-laplacian's (30 neighbours, the anchor); and the two mixtures (the mesh's
+stiffness with our mass, our stiffness with the mesh's mass), which tell whether what
+is lost is in the stiffness or in the mass.
+
+Last, how much of each class's surface has **another sheet within one spacing**: the
+decimated mesh's vertices with a vertex within one spacing (``sqrt(area / n)``) in space
+but more than five spacings away along the mesh's edges (a paw against the body, a tail
+along a leg, closed lips). No neighbourhood of a cloud can see the gap there.
+"""
+
+import argparse
+import time
+import warnings
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+import trimesh
+from _common import DATA, collection, loo_1nn
+from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import cKDTree
+from scipy.spatial.distance import cdist
+
+from sklearn_meshph import (
+    cotangent_laplacian,
+    make_mesh_distance,
+    point_cloud_laplacian,
+    sample_point_cloud,
+)
+from sklearn_meshph.mesh import unit_box
+from sklearn_meshph.mesh.cleaning import MeshCleaningWarning
+
+PARTS = {
+    "ord1": {"ord1": 1.0, "ext0": 0.0, "ext1": 0.0, "dna": 0.0},
+    "ext0": {"ord1": 0.0, "ext0": 1.0, "ext1": 0.0, "dna": 0.0},
+    "Shape-DNA": {"ord1": 0.0, "ext0": 0.0, "ext1": 0.0, "dna": 1.0},
+    "all (no ext1)": {"ext0": 0.5, "ext1": 0.0, "dna": 0.5},
+}
+N_EIGENVALUES = 48
+
+
+def decimate(mesh, n_points):
+    """The mesh decimated to about ``n_points`` vertices (``2 n_points`` faces)."""
+    full = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    return full.simplify_quadric_decimation(face_count=2 * n_points)
+
+
+def part_scores(samples, y):
+    """Leave-one-out 1-NN of each part of the default's distance on ``samples``."""
+    pipeline = make_mesh_distance(n_jobs=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshCleaningWarning)
+        fields = pipeline.named_steps["eigen"].fit_transform(samples)
+    distance = pipeline.named_steps["distance"]
+    return {
+        part: loo_1nn(distance.set_params(weights=weights).fit_transform(fields), y)
+        for part, weights in PARTS.items()
+    }
+
+
+def shape_dna(L, M):
+    """The first eigenvalues (the zero one left out) times the area, of the points with
+    mass (a cloud's point in no triangle has none)."""
+    L, M = sp.csr_matrix(L), sp.csr_matrix(M)
+    keep = M.diagonal() > 0
+    L, M = L[keep][:, keep], M[keep][:, keep]
+    start = np.ones(L.shape[0])
+    values = sla.eigsh(L, N_EIGENVALUES + 1, M, sigma=-1e-6, which="LM", v0=start)[0]
+    return np.sort(values)[1:] * M.sum()
+
+
+def robust(points):
+    import robust_laplacian
+
+    L, M = robust_laplacian.point_cloud_laplacian(points, n_neighbors=30)
+    return L, M
+
+
+def operators(mesh):
+    """Shape-DNA of each pencil on the decimated mesh's vertices (in the unit box)."""
+    points = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
+    faces = np.asarray(mesh.faces)
+    L_mesh, M_mesh = cotangent_laplacian(points, faces)
+    L_ours, M_ours = point_cloud_laplacian(points)
+    return {
+        "the mesh's L and M": shape_dna(L_mesh, M_mesh),
+        "ours": shape_dna(L_ours, M_ours),
+        "robust-laplacian": shape_dna(*robust(points)),
+        "the mesh's L, our M": shape_dna(L_mesh, M_ours),
+        "our L, the mesh's M": shape_dna(L_ours, M_mesh),
+    }
+
+
+def contact_share(mesh, within=1.0, apart=5.0):
+    """Share of the vertices with another sheet within ``within`` spacings in space
+    and more than ``apart`` spacings away along the edges."""
+    points = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces)
+    spacing = np.sqrt(mesh.area / len(points))
+    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
+    graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(points),) * 2)
+    graph = graph.tocsr().maximum(graph.tocsr().T)
+    pairs = cKDTree(points).query_pairs(within * spacing, output_type="ndarray")
+    if len(pairs) == 0:
+        return 0.0
+    along = dijkstra(graph, directed=False, limit=1.2 * apart * spacing)
+    far = along[pairs[:, 0], pairs[:, 1]] > apart * spacing
+    return len(np.unique(pairs[far])) / len(points)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--collection", default="sumner")
+    parser.add_argument("--points", type=int, default=3000)
+    parser.add_argument("--per-class", type=int, default=None, help="first N of each class")
+    args = parser.parse_args()
+    loaded = collection(args.collection, 2)
+    if loaded is None:
+        raise SystemExit(f"{args.collection} not found in {DATA}")
+    meshes, y, names = loaded
+    if args.per_class is not None:
+        keep = np.concatenate([np.flatnonzero(y == c)[: args.per_class] for c in np.unique(y)])
+        meshes, y = [meshes[i] for i in keep], y[keep]
+    start = time.perf_counter()
+    decimated = [decimate(m, args.points) for m in meshes]
+    inputs = {
+        "meshes": meshes,
+        f"meshes decimated to ~{args.points} vertices": decimated,
+        "their vertices as clouds": [np.asarray(d.vertices) for d in decimated],
+        f"uniform clouds of {args.points} points": [
+            sample_point_cloud(m, args.points, random_state=k) for k, m in enumerate(meshes)
+        ],
+    }
+    print(
+        f"{args.collection}: {len(meshes)} meshes; make_mesh_distance(), leave-one-out 1-NN "
+        "per part of the distance"
+    )
+    print(f"| input | {' | '.join(PARTS)} |\n|---|{'---|' * len(PARTS)}")
+    for label, samples in inputs.items():
+        scores = part_scores(samples, y)
+        print(f"| {label} | {' | '.join(f'{scores[p]:.3f}' for p in PARTS)} |", flush=True)
+
+    spectra = [operators(d) for d in decimated]
+    print(
+        f"\nThe operator alone on the decimated vertices: Shape-DNA ({N_EIGENVALUES} "
+        "eigenvalues x area, Canberra), leave-one-out 1-NN, and the median over the shapes "
+        "of the median relative error of eigenvalues 1-20 against the mesh's"
+    )
+    print("| pencil | Shape-DNA 1-NN | median error 1-20 |\n|---|---|---|")
+    reference = np.array([s["the mesh's L and M"] for s in spectra])
+    for label in spectra[0]:
+        features = np.array([s[label] for s in spectra])
+        distances = cdist(features, features, "canberra")
+        error = np.median(np.median(np.abs(features / reference - 1)[:, :20], axis=1))
+        print(f"| {label} | {loo_1nn(distances, y):.3f} | {error:.3f} |", flush=True)
+
+    shares = np.array([contact_share(d) for d in decimated])
+    print("\nVertices of the decimated meshes with another sheet within one spacing")
+    print("| class | mean | largest |\n|---|---|---|")
+    for c in np.unique(y):
+        print(f"| {names[c]} | {shares[y == c].mean():.3f} | {shares[y == c].max():.3f} |")
+    print(f"\n{time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
