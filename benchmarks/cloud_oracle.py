@@ -19,7 +19,11 @@ times the area, Canberra distance, leave-one-out 1-NN) of the pencil ``(L, M)`` 
 five ways: the mesh's cotangent stiffness and mass; ours (``point_cloud_laplacian``);
 robust-laplacian's (30 neighbours, the anchor); and the two mixtures (the mesh's
 stiffness with our mass, our stiffness with the mesh's mass), which tell whether what
-is lost is in the stiffness or in the mass.
+is lost is in the stiffness or in the mass; and two oracles, our operator with the
+neighbours the mesh says are on another sheet left out (facing away by the mesh's
+outward normals, or more than twice as far along the mesh's edges as in space), which
+tell what telling sheets apart would give. Each Shape-DNA is of the piece of largest
+mass (an oracle can cut a thin tip off).
 
 Last, how much of each class's surface has **another sheet within one spacing**: the
 decimated mesh's vertices with a vertex within one spacing (``sqrt(area / n)``) in space
@@ -36,7 +40,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 import trimesh
 from _common import DATA, collection, loo_1nn
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
@@ -48,6 +52,7 @@ from sklearn_meshph import (
 )
 from sklearn_meshph.mesh import unit_box
 from sklearn_meshph.mesh.cleaning import MeshCleaningWarning
+from sklearn_meshph.pointcloud import _triangulation
 
 PARTS = {
     "ord1": {"ord1": 1.0, "ext0": 0.0, "ext1": 0.0, "dna": 0.0},
@@ -79,9 +84,12 @@ def part_scores(samples, y):
 
 def shape_dna(L, M):
     """The first eigenvalues (the zero one left out) times the area, of the points with
-    mass (a cloud's point in no triangle has none)."""
+    mass (a cloud's point in no triangle has none), on the piece of largest mass."""
     L, M = sp.csr_matrix(L), sp.csr_matrix(M)
     keep = M.diagonal() > 0
+    L, M = L[keep][:, keep], M[keep][:, keep]
+    _, labels = connected_components(abs(L) > 0, directed=False)
+    keep = labels == np.argmax(np.bincount(labels, weights=M.diagonal()))
     L, M = L[keep][:, keep], M[keep][:, keep]
     start = np.ones(L.shape[0])
     values = sla.eigsh(L, N_EIGENVALUES + 1, M, sigma=-1e-6, which="LM", v0=start)[0]
@@ -95,18 +103,63 @@ def robust(points):
     return L, M
 
 
+def with_neighbours_left_out(points, leave_out):
+    """Our operator with ``leave_out(neighbors)`` (an ``(n, k)`` mask) removed from every
+    point's surface neighbours (an oracle: the mask comes from the mesh)."""
+    original = _triangulation.surface_neighbours
+
+    def patched(points, n_neighbors):
+        neighbors, usable, normal, basis = original(points, n_neighbors)
+        return neighbors, usable & ~leave_out(neighbors), normal, basis
+
+    _triangulation.surface_neighbours = patched
+    try:
+        return point_cloud_laplacian(points)
+    finally:
+        _triangulation.surface_neighbours = original
+
+
+def facing_away(normals, cosine=-0.5):
+    """Neighbours whose outward normal (the mesh's) is more than 120 degrees from the
+    point's: the other sheet of a contact, the far side of a thin part."""
+    return lambda neighbors: np.einsum("nkj,nj->nk", normals[neighbors], normals) < cosine
+
+
+def around(points, faces, ratio=2.0):
+    """Neighbours more than ``ratio`` times farther along the mesh's edges than in space."""
+    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
+    graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(points),) * 2)
+    graph = graph.tocsr().maximum(graph.tocsr().T)
+
+    def mask(neighbors):
+        rows = np.repeat(np.arange(len(points)), neighbors.shape[1])
+        space = np.linalg.norm(points[rows] - points[neighbors.ravel()], axis=1)
+        along = dijkstra(graph, directed=False, limit=1.01 * ratio * space.max())
+        return (along[rows, neighbors.ravel()] > ratio * space).reshape(neighbors.shape)
+
+    return mask
+
+
 def operators(mesh):
     """Shape-DNA of each pencil on the decimated mesh's vertices (in the unit box)."""
     points = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
     faces = np.asarray(mesh.faces)
     L_mesh, M_mesh = cotangent_laplacian(points, faces)
     L_ours, M_ours = point_cloud_laplacian(points)
+    normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
     return {
         "the mesh's L and M": shape_dna(L_mesh, M_mesh),
         "ours": shape_dna(L_ours, M_ours),
         "robust-laplacian": shape_dna(*robust(points)),
         "the mesh's L, our M": shape_dna(L_mesh, M_ours),
         "our L, the mesh's M": shape_dna(L_ours, M_mesh),
+        "ours, neighbours facing away (mesh normals) left out": shape_dna(
+            *with_neighbours_left_out(points, facing_away(normals))
+        ),
+        "ours, neighbours 2x farther along the mesh left out": shape_dna(
+            *with_neighbours_left_out(points, around(points, faces))
+        ),
     }
 
 
