@@ -8,6 +8,7 @@ import scipy.sparse as sp
 import trimesh
 from conftest import irregular_ellipsoid
 
+from sklearn_meshph import laplacian_eigenfunctions
 from sklearn_meshph.spectral import eigensolver
 from sklearn_meshph.spectral._cholesky import SupernodalCholesky, negative_eigenvalues
 from sklearn_meshph.spectral.eigensolver import dense_eigenpairs, generalized_eigenpairs
@@ -250,3 +251,24 @@ def test_the_spectrum_does_not_depend_on_the_mesh_size(size):
     values, vectors = generalized_eigenpairs(L, M, 10, points=mesh.vertices * size)
     np.testing.assert_allclose(values[1:] * size**2, reference[1:], rtol=1e-9)
     np.testing.assert_allclose((vectors.T * M.diagonal()) @ vectors, np.eye(10), atol=1e-9)
+
+
+@pytest.mark.parametrize("size", [1e-150, 1e-100, 1e100, 1e150])
+def test_laplacian_eigenfunctions_at_any_size_float64_holds(size):
+    # It built the operator on the mesh as given: at size 1e-100 the squared areas
+    # underflowed and every face was refused as degenerate; at 1e100 the areas
+    # overflowed and every eigenvalue came back 0.
+    mesh = trimesh.creation.icosphere(2)
+    faces = np.asarray(mesh.faces)
+    reference, ref_vectors = laplacian_eigenfunctions((mesh.vertices, faces), 6)
+    values, vectors = laplacian_eigenfunctions((mesh.vertices * size, faces), 6)
+    np.testing.assert_allclose(values[1:] * size * size, reference[1:], rtol=1e-9)
+    # M-orthonormal at the mesh's own scale: the vectors scale as 1 / size.
+    np.testing.assert_allclose(np.abs(vectors[:, 0] * size), np.abs(ref_vectors[:, 0]), rtol=1e-9)
+
+
+@pytest.mark.parametrize("size", [1e-160, 1e160])
+def test_laplacian_eigenfunctions_beyond_float64_is_an_error(size):
+    mesh = trimesh.creation.icosphere(2)
+    with pytest.raises(ValueError, match="beyond float64's range"):
+        laplacian_eigenfunctions((mesh.vertices * size, np.asarray(mesh.faces)), 6)

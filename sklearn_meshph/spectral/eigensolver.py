@@ -30,7 +30,7 @@ from .._param_validation import Interval, Options, validate_params
 from .._threads import one_blas_thread
 from ..graph.validation import Graph
 from ..inputs import check_input
-from ..mesh.cleaning import COMPONENT_POLICIES, clean_checked, describe, warn_if_lossy
+from ..mesh.cleaning import COMPONENT_POLICIES, describe, warn_if_lossy
 from ._cholesky import SupernodalCholesky, negative_eigenvalues
 from .factorization import SOLVERS, ShiftInvertOperator
 from .lanczos import shift_invert_lanczos
@@ -306,8 +306,12 @@ def laplacian_eigenfunctions(
 ) -> tuple[np.ndarray, np.ndarray]:
     """First eigenpairs of a mesh Laplacian, the constant one included.
 
-    The mesh is used as given: no rescaling, so the unit sphere gives eigenvalues close to
-    ``l (l + 1)``: 0, 2, 2, 2, 6, ... For scale- and resolution-free eigenfunctions use
+    The eigenpairs are the mesh's at its own scale (no normalization), so the unit
+    sphere gives eigenvalues close to ``l (l + 1)``: 0, 2, 2, 2, 6, ... The mesh is
+    cleaned and solved in a unit box and the eigenpairs scaled back, so any size float64
+    holds gives them (a mesh of size 1e-150 has eigenvalues near 1e300); where they are
+    beyond float64's range (sizes below about 1e-154 or above 1e154) a ``ValueError``
+    says so. For scale- and resolution-free eigenfunctions use
     :class:`LaplacianEigenTransformer`, which normalizes to unit area.
 
     Parameters
@@ -385,7 +389,7 @@ def laplacian_eigenfunctions(
         SolveSettings,
         cloud_eigenpairs,
         graph_eigenpairs,
-        refuse_all_components,
+        mesh_eigenpairs,
         warn_graph_components,
     )
 
@@ -402,8 +406,12 @@ def laplacian_eigenfunctions(
         )
         warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
     else:
-        refuse_all_components(components, None, "mesh")
-        clean = clean_checked(vertices, faces, components=components, index=None, weld=weld)
+        # In the unit box and scaled back (mesh_eigenpairs): a mesh of size 1e-150 or
+        # 1e150 has the same functions, and eigenvalues beyond float64's range are an
+        # error, not zeros or a refusal of faces whose areas underflow.
+        clean, values, vectors = mesh_eigenpairs(
+            vertices, faces, settings, n_eigenpairs, random_state, None
+        )
         warn_if_lossy(clean.report, describe(None, mesh), stacklevel=3)
     kept = len(clean.vertices)
     if n_eigenpairs > kept:
@@ -411,9 +419,4 @@ def laplacian_eigenfunctions(
         raise ValueError(
             f"n_eigenpairs must be between 1 and {kept} (the kept {what}), got {n_eigenpairs}"
         )
-    if faces is None:
-        return values, vectors
-    L, M = LAPLACIANS[laplacian].value(clean.vertices, clean.faces)
-    return generalized_eigenpairs(
-        L, M, n_eigenpairs, seed=random_state, points=clean.vertices, solver=solver
-    )
+    return values, vectors

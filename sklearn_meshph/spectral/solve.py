@@ -265,6 +265,7 @@ def _eigenpairs(
             raise ValueError(
                 f"{where(index)}: with normalization='none' the eigenpairs of this {kind} "
                 f"(extent about {scale:.3g}) are beyond float64's range; use "
-                "normalization='area', which gives the same functions at any scale"
+                "normalization='area' (LaplacianEigenTransformer's default), which gives "
+                "the same functions at any scale"
             )
     return values, vectors
