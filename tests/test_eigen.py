@@ -11,7 +11,12 @@ from conftest import irregular_ellipsoid
 from half_refinement import refine_upper_half
 from scipy.spatial.transform import Rotation
 
-from sklearn_meshph import LaplacianEigenTransformer, RepeatedEigenvalueWarning, ScalarField
+from sklearn_meshph import (
+    LaplacianEigenTransformer,
+    RepeatedEigenvalueWarning,
+    ScalarField,
+    make_graph_classifier,
+)
 from sklearn_meshph.spectral.cache import CacheWarning
 from sklearn_meshph.spectral.quality import MeshQualityWarning
 
@@ -226,8 +231,15 @@ def test_the_constant_eigenfunction_warns_that_it_says_nothing():
 
 
 def test_single_mesh_instead_of_a_sequence_is_refused():
-    with pytest.raises(TypeError, match="sequence of meshes"):
+    with pytest.raises(TypeError, match="sequence of meshes, point clouds or graphs"):
         LaplacianEigenTransformer().fit_transform(bumpy(1))
+
+
+def test_no_sample_is_refused_naming_every_kind_of_input():
+    # The eigen stage takes graphs too: "at least one of meshes" misled graph users.
+    for estimator in (LaplacianEigenTransformer(), make_graph_classifier()):
+        with pytest.raises(ValueError, match="at least one of meshes, point clouds or graphs"):
+            estimator.fit([], [])
 
 
 def test_clone_params_and_pickle_round_trip(estimator_round_trip):

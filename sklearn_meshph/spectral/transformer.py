@@ -310,7 +310,7 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
     [15.56, 8.44]
     """
 
-    _sample_kind = "meshes"
+    _sample_kind = "meshes, point clouds or graphs"
     _parameter_constraints: dict = {
         "eigen_index": [Interval(Integral, 0, None, closed="left"), tuple],
         "laplacian": [Options(LAPLACIANS)],
