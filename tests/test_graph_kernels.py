@@ -11,7 +11,7 @@ from sklearn.model_selection import KFold, cross_val_score, cross_validate
 from test_graph_learning import cycle, eigen, star
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
-from sklearn_meshph.vectorization import GraphPairDistances, KernelSumSVC
+from sklearn_meshph.vectorization import GraphPairDistances, KernelSumSVC, graph_svc
 
 
 def path(n):
@@ -82,6 +82,18 @@ def test_kernel_sum_clone_pickle_params():
     model.fit(stack, y)
     again = pickle.loads(pickle.dumps(model))
     np.testing.assert_array_equal(again.decision_function(stack), model.decision_function(stack))
+
+
+def test_kernel_sum_blocks_of_rows_give_the_same_model(monkeypatch):
+    # The kernels are taken a block of rows at a time (memory); any block gives the
+    # same bits, the last block a partial one included.
+    stack, y = separable_stack(n=42)
+    whole = KernelSumSVC(groups=(0, 1)).fit(stack, y)
+    monkeypatch.setattr(graph_svc, "_KERNEL_BLOCK", 5 * stack.shape[1] * stack.shape[2])
+    blocked = KernelSumSVC(groups=(0, 1)).fit(stack, y)
+    assert blocked.cv_scores_ == whole.cv_scores_
+    np.testing.assert_array_equal(blocked.decision_function(stack), whole.decision_function(stack))
+    np.testing.assert_array_equal(blocked._kernels(stack), whole._kernels(stack))
 
 
 def test_kernel_sum_chooses_on_a_subset_of_large_training_sets():
