@@ -9,21 +9,22 @@ which no cloud has), scored by leave-one-out 1-NN per part of the distance (``or
 
 - the meshes;
 - the meshes **decimated** to about ``--points`` vertices (quadric edge collapse,
-  ``trimesh.simplify_quadric_decimation``): the resolution of the clouds;
+  ``trimesh.simplify_quadric_decimation``; a mesh with fewer kept as it is): the
+  resolution of the clouds;
 - the decimated meshes' **vertices as clouds**: the same points, without the faces;
 - **uniform clouds** of ``--points`` points (``sample_point_cloud``, seed = the mesh's
   index, as ``learning_quality.py``).
 
-Then the operator alone, on the decimated vertices: the Shape-DNA (first 48 eigenvalues
-times the area, Canberra distance, leave-one-out 1-NN) of the pencil ``(L, M)`` built
-five ways: the mesh's cotangent stiffness and mass; ours (``point_cloud_laplacian``);
-robust-laplacian's (30 neighbours, the anchor); and the two mixtures (the mesh's
-stiffness with our mass, our stiffness with the mesh's mass), which tell whether what
-is lost is in the stiffness or in the mass; and two oracles, our operator with the
-neighbours the mesh says are on another sheet left out (facing away by the mesh's
-outward normals, or more than twice as far along the mesh's edges as in space), which
-tell what telling sheets apart would give. Each Shape-DNA is of the piece of largest
-mass (an oracle can cut a thin tip off).
+Then the operator alone, on the decimated vertices (the decimated mesh cleaned): the
+Shape-DNA (first 48 eigenvalues times the area, Canberra distance, leave-one-out 1-NN)
+of the pencil ``(L, M)`` built five ways: the mesh's cotangent stiffness and mass;
+ours (``point_cloud_laplacian``); robust-laplacian's (30 neighbours, the anchor); and
+the two mixtures (the mesh's stiffness with our mass, our stiffness with the mesh's
+mass), which tell whether what is lost is in the stiffness or in the mass; and two
+oracles, our operator with the neighbours the mesh says are on another sheet left out
+(facing away by the mesh's outward normals, or more than twice as far along the mesh's
+edges as in space), which tell what telling sheets apart would give. Each Shape-DNA is
+of the piece of largest mass (an oracle can cut a thin tip off).
 
 Last, how much of each class's surface has **another sheet within one spacing**: the
 decimated mesh's vertices with a vertex within one spacing (``sqrt(area / n)``) in space
@@ -45,6 +46,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from sklearn_meshph import (
+    clean_mesh,
     cotangent_laplacian,
     make_mesh_distance,
     point_cloud_laplacian,
@@ -64,8 +66,11 @@ N_EIGENVALUES = 48
 
 
 def decimate(mesh, n_points):
-    """The mesh decimated to about ``n_points`` vertices (``2 n_points`` faces)."""
+    """The mesh decimated to about ``n_points`` vertices (``2 n_points`` faces); a mesh
+    with fewer faces is kept as it is."""
     full = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    if len(full.faces) <= 2 * n_points:
+        return full
     return full.simplify_quadric_decimation(face_count=2 * n_points)
 
 
@@ -142,9 +147,13 @@ def around(points, faces, ratio=2.0):
 
 
 def operators(mesh):
-    """Shape-DNA of each pencil on the decimated mesh's vertices (in the unit box)."""
-    points = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
-    faces = np.asarray(mesh.faces)
+    """Shape-DNA of each pencil on the decimated mesh's vertices (in the unit box), the
+    mesh cleaned first (decimation can leave degenerate faces)."""
+    unit = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshCleaningWarning)
+        clean = clean_mesh(unit, np.asarray(mesh.faces))
+    points, faces = clean.vertices, clean.faces
     L_mesh, M_mesh = cotangent_laplacian(points, faces)
     L_ours, M_ours = point_cloud_laplacian(points)
     normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
