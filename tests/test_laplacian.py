@@ -5,6 +5,8 @@ the public functions only: against each other and the unit sphere's spectrum on 
 of 41k vertices, and against dense solvers on meshes of 642 and 2,562 vertices.
 """
 
+import re
+
 import conftest
 import numpy as np
 import pytest
@@ -237,6 +239,26 @@ def test_tiny_mesh_uses_the_dense_path_and_checks_n_eigenpairs():
     assert np.isfinite(vectors).all()
     with pytest.raises(ValueError, match="n_eigenpairs must be between 1 and 3"):
         laplacian_eigenfunctions((vertices, [[0, 1, 2]]), 4)
+
+
+@pytest.mark.parametrize(
+    "sample, rows",
+    [
+        (trimesh.creation.icosphere(2), "162 (the kept vertices)"),
+        (np.random.default_rng(0).random((300, 3)), "300 (the kept points)"),
+    ],
+)
+def test_too_many_eigenpairs_is_refused_before_any_solve(monkeypatch, sample, rows):
+    # The request was checked after the solve, which had been clipped to every
+    # eigenpair: n_eigenpairs=10**6 on a large mesh meant a dense solve of all of them.
+    from sklearn_meshph.spectral import solve
+
+    def no_solve(*args, **kwargs):
+        raise AssertionError("solved before refusing")
+
+    monkeypatch.setattr(solve, "generalized_eigenpairs", no_solve)
+    with pytest.raises(ValueError, match=rf"between 1 and {re.escape(rows)}, got 1000000"):
+        laplacian_eigenfunctions(sample, 10**6)
 
 
 def test_the_former_n_eigs_keyword_still_works_with_a_future_warning():

@@ -46,7 +46,9 @@ class SolveSettings:
     weld: bool = True
 
 
-def mesh_eigenpairs(vertices, faces, settings: SolveSettings, n_eigenpairs, seed, index):
+def mesh_eigenpairs(
+    vertices, faces, settings: SolveSettings, n_eigenpairs, seed, index, *, exact=False
+):
     """Clean one validated mesh and solve its eigenpairs: the unit ``memory`` caches.
 
     The cache key is the input mesh's content and the settings (``index``, the sample's
@@ -68,12 +70,12 @@ def mesh_eigenpairs(vertices, faces, settings: SolveSettings, n_eigenpairs, seed
     clean = replace(clean, vertices=np.ascontiguousarray(vertices[clean.vertex_indices]))
     sizes = f"{len(clean.vertices)} vertices, {len(clean.faces)} faces"
     values, vectors = _eigenpairs(
-        L, M, points, settings, n_eigenpairs, seed, index, scale, "mesh", sizes
+        L, M, points, settings, n_eigenpairs, seed, index, scale, "mesh", sizes, exact=exact
     )
     return clean, values, vectors
 
 
-def cloud_eigenpairs(points, settings: SolveSettings, n_eigenpairs, seed, index):
+def cloud_eigenpairs(points, settings: SolveSettings, n_eigenpairs, seed, index, *, exact=False):
     """Clean one validated point cloud and solve its eigenpairs, as
     :func:`mesh_eigenpairs` does for a mesh.
 
@@ -97,7 +99,17 @@ def cloud_eigenpairs(points, settings: SolveSettings, n_eigenpairs, seed, index)
     )
     sizes = f"{len(clean.vertices)} points"
     values, vectors = _eigenpairs(
-        L, M, solve_points, settings, n_eigenpairs, seed, index, scale, "point cloud", sizes
+        L,
+        M,
+        solve_points,
+        settings,
+        n_eigenpairs,
+        seed,
+        index,
+        scale,
+        "point cloud",
+        sizes,
+        exact=exact,
     )
     return clean, values, np.ascontiguousarray(vectors[to_output])
 
@@ -193,7 +205,9 @@ def graph_components(graph: Graph, components: str, index) -> tuple[Graph, Clean
     return kept, clean
 
 
-def graph_eigenpairs(graph: Graph, settings: SolveSettings, n_eigenpairs, seed, index):
+def graph_eigenpairs(
+    graph: Graph, settings: SolveSettings, n_eigenpairs, seed, index, *, exact=False
+):
     """Keep the components of one validated graph that ``settings.components`` says and
     solve its eigenpairs, as :func:`mesh_eigenpairs` does for a mesh.
 
@@ -228,15 +242,49 @@ def graph_eigenpairs(graph: Graph, settings: SolveSettings, n_eigenpairs, seed, 
     L, M = GRAPH_LAPLACIANS[settings.laplacian].value(kept)
     sizes = f"{kept.n_nodes} nodes, {kept.n_edges} edges"
     values, vectors = _eigenpairs(
-        L, M, None, settings, n_eigenpairs, seed, index, 1.0, "graph", sizes, DENSE_MAX_NODES
+        L,
+        M,
+        None,
+        settings,
+        n_eigenpairs,
+        seed,
+        index,
+        1.0,
+        "graph",
+        sizes,
+        DENSE_MAX_NODES,
+        exact=exact,
     )
     return clean, values, vectors
 
 
+#: What the rows of each kind of sample are, in messages.
+_ROWS = {"mesh": "vertices", "point cloud": "points", "graph": "nodes"}
+
+
 def _eigenpairs(
-    L, M, points, settings, n_eigenpairs, seed, index, scale, kind, sizes, dense_max=None
+    L,
+    M,
+    points,
+    settings,
+    n_eigenpairs,
+    seed,
+    index,
+    scale,
+    kind,
+    sizes,
+    dense_max=None,
+    *,
+    exact=False,
 ):
-    """The eigenpairs of an operator built in the unit box, normalized as asked."""
+    """The eigenpairs of an operator built in the unit box, normalized as asked: as many
+    as asked, or all of them where the cleaned sample has fewer rows (with ``exact``,
+    that is a ``ValueError`` before anything is solved)."""
+    if exact and n_eigenpairs > L.shape[0]:
+        raise ValueError(
+            f"n_eigenpairs must be between 1 and {L.shape[0]} (the kept {_ROWS[kind]}), "
+            f"got {n_eigenpairs}"
+        )
     if settings.normalization == "area":
         M = M / M.diagonal().sum()
     n_eigenpairs = min(n_eigenpairs, L.shape[0])
