@@ -15,6 +15,11 @@ which no cloud has), scored by leave-one-out 1-NN per part of the distance (``or
 - **uniform clouds** of ``--points`` points (``sample_point_cloud``, seed = the mesh's
   index, as ``learning_quality.py``).
 
+A second table tells the operator from the complex, on the samples where cleaning kept
+the same vertices in the decimated mesh and in its vertices as a cloud: the mesh's
+values and spectrum on the cloud's complex (the edges of our local triangles), and the
+cloud's on the mesh's faces, beside each on its own.
+
 Then the operator alone, on the decimated vertices (the decimated mesh cleaned): the
 Shape-DNA (first 48 eigenvalues times the area, Canberra distance, leave-one-out 1-NN)
 of the pencil ``(L, M)`` built five ways: the mesh's cotangent stiffness and mass;
@@ -33,6 +38,7 @@ along a leg, closed lips). No neighbourhood of a cloud can see the gap there.
 """
 
 import argparse
+import dataclasses
 import time
 import warnings
 
@@ -74,17 +80,34 @@ def decimate(mesh, n_points):
     return full.simplify_quadric_decimation(face_count=2 * n_points)
 
 
-def part_scores(samples, y):
-    """Leave-one-out 1-NN of each part of the default's distance on ``samples``."""
-    pipeline = make_mesh_distance(n_jobs=2)
+def fields_of(samples):
+    """The default's eigen stage on ``samples`` (its scalar fields)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshCleaningWarning)
-        fields = pipeline.named_steps["eigen"].fit_transform(samples)
-    distance = pipeline.named_steps["distance"]
+        return make_mesh_distance(n_jobs=2).named_steps["eigen"].fit_transform(samples)
+
+
+def part_scores(fields, y):
+    """Leave-one-out 1-NN of each part of the default's distance on the ``fields``."""
+    distance = make_mesh_distance(n_jobs=2).named_steps["distance"]
     return {
         part: loo_1nn(distance.set_params(weights=weights).fit_transform(fields), y)
         for part, weights in PARTS.items()
     }
+
+
+def swapped(meshes, clouds):
+    """Each sample's values and spectrum (what the operator gives) from ``meshes`` on the
+    complex of ``clouds`` where the two kept the same vertices; ``clouds``' own field
+    elsewhere."""
+    return [
+        dataclasses.replace(
+            cloud, values=mesh.values, eigenvalues=mesh.eigenvalues, spectrum=mesh.spectrum
+        )
+        if np.array_equal(mesh.vertices, cloud.vertices)
+        else cloud
+        for mesh, cloud in zip(meshes, clouds, strict=True)
+    ]
 
 
 def shape_dna(L, M):
@@ -218,8 +241,35 @@ def main():
         "per part of the distance"
     )
     print(f"| input | {' | '.join(PARTS)} |\n|---|{'---|' * len(PARTS)}")
+    fields = {}
     for label, samples in inputs.items():
-        scores = part_scores(samples, y)
+        fields[label] = fields_of(samples)
+        scores = part_scores(fields[label], y)
+        print(f"| {label} | {' | '.join(f'{scores[p]:.3f}' for p in PARTS)} |", flush=True)
+    decimated_fields, vertex_fields = list(fields.values())[1:3]
+    # The operator or the complex: the mesh's values on the cloud's complex and the
+    # cloud's values on the mesh's faces, on the samples where cleaning kept the same
+    # vertices in both (every row of this table on those samples only).
+    same = np.flatnonzero(
+        [
+            np.array_equal(a.vertices, b.vertices)
+            for a, b in zip(decimated_fields, vertex_fields, strict=True)
+        ]
+    )
+    meshes_kept = [decimated_fields[i] for i in same]
+    clouds_kept = [vertex_fields[i] for i in same]
+    print(
+        f"\nThe operator or the complex, on the {len(same)} samples whose decimated mesh and "
+        "vertices as a cloud kept the same vertices"
+    )
+    print(f"| values and spectrum, complex | {' | '.join(PARTS)} |\n|---|{'---|' * len(PARTS)}")
+    for label, mixed in (
+        ("the mesh's, its faces", meshes_kept),
+        ("the cloud's, its local triangles' edges", clouds_kept),
+        ("the mesh's, the cloud's edges", swapped(meshes_kept, clouds_kept)),
+        ("the cloud's, the mesh's faces", swapped(clouds_kept, meshes_kept)),
+    ):
+        scores = part_scores(mixed, y[same])
         print(f"| {label} | {' | '.join(f'{scores[p]:.3f}' for p in PARTS)} |", flush=True)
 
     spectra = [operators(d) for d in decimated]
