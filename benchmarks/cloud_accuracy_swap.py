@@ -3,17 +3,19 @@
     python benchmarks/cloud_accuracy_swap.py OPERATOR COMPLEX [--points 3000]
         [--collection watertight_dev] [--per-class N] [--cache DIR]
 
-``OPERATOR`` is ``new`` (the operator on each point's own sheet) or ``old`` (commit
+``OPERATOR`` is ``new`` (the operator on each point's own sheet), ``old`` (commit
 ``2eb9ede``'s: the Delaunay fan of all 30 neighbours in the principal plane of all 30,
-measured in that plane); ``COMPLEX`` is ``new`` (the edges of the operator's local
-triangles), ``knn`` (the symmetric 10-nearest-neighbour graph of ``2eb9ede``) or
-``sheet`` (the triangles' edges and each point's 10 nearest neighbours that the
-operator keeps on its sheet). The same clouds as ``learning_quality.py`` (seed = the
-mesh's index) go through ``make_mesh_distance()``; printed: leave-one-out 1-NN, and,
-beside the meshes' distance matrix without essential H1 (what a cloud's diagrams can
-hold), the Spearman correlation of the two matrices and the share of each sample's 5
-nearest that they have in common. The old operator's solves are cached in a folder of
-their own (``DIR/old-operator``): the cache's key does not know the operator was swapped.
+measured in that plane) or ``robust`` (robust-laplacian's, 30 neighbours, in place of
+``point_cloud_laplacian``; the complex stays ours); ``COMPLEX`` is ``new`` (the edges
+of the operator's local triangles), ``knn`` (the symmetric 10-nearest-neighbour graph
+of ``2eb9ede``) or ``sheet`` (the triangles' edges and each point's 10 nearest
+neighbours that the operator keeps on its sheet). The same clouds as
+``learning_quality.py`` (seed = the mesh's index) go through ``make_mesh_distance()``;
+printed: leave-one-out 1-NN, and, beside the meshes' distance matrix without essential
+H1 (what a cloud's diagrams can hold), the Spearman correlation of the two matrices and
+the share of each sample's 5 nearest that they have in common. The swapped operators'
+solves are cached in folders of their own (``DIR/old-operator``,
+``DIR/robust-operator``): the cache's key does not know the operator was swapped.
 """
 
 import argparse
@@ -25,6 +27,7 @@ from _common import DATA, loo_1nn
 from scipy.stats import spearmanr
 
 from sklearn_meshph import load_mesh_folder, make_mesh_distance, sample_point_cloud
+from sklearn_meshph._registry import Option
 from sklearn_meshph.mesh import DEGENERATE_SINE, unit_box
 from sklearn_meshph.mesh.cleaning import MeshCleaningWarning
 from sklearn_meshph.pointcloud import graph as cloud_graph
@@ -56,6 +59,16 @@ def old_tangent_fans(points, n_neighbors=30):
     return triangles, np.hstack([a[keep], zero]), np.hstack([b[keep], zero])
 
 
+def robust_operator(points, n_neighbors=30):
+    """robust-laplacian's point-cloud operator (ours on pieces too small for it)."""
+    import robust_laplacian
+
+    if len(points) <= 2 * n_neighbors:
+        return cloud_laplacians.point_cloud_laplacian(points)
+    L, M = robust_laplacian.point_cloud_laplacian(points, n_neighbors=n_neighbors)
+    return L.tocsr(), M
+
+
 def sheet_graph(points, width=10):
     """The triangles' edges and each point's ``width`` nearest kept on its sheet."""
     order = cloud_graph.canonical_order(points)
@@ -69,7 +82,7 @@ def sheet_graph(points, width=10):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("operator", choices=["new", "old"])
+    parser.add_argument("operator", choices=["new", "old", "robust"])
     parser.add_argument("complex", choices=["new", "knn", "sheet"])
     parser.add_argument("--points", type=int, default=3000)
     parser.add_argument("--collection", default="watertight_dev")
@@ -80,6 +93,11 @@ def main():
     if args.operator == "old":
         cloud_laplacians.tangent_fans = old_tangent_fans
         memory = None if memory is None else str(Path(memory) / "old-operator")
+    if args.operator == "robust":
+        cloud_laplacians.CLOUD_LAPLACIANS._options["cotangent"] = Option(
+            "cotangent", robust_operator, "robust-laplacian's"
+        )
+        memory = None if memory is None else str(Path(memory) / "robust-operator")
     if args.complex != "new":
         spectral_transformer.surface_graph = (
             cloud_graph.knn_graph if args.complex == "knn" else sheet_graph
