@@ -353,6 +353,10 @@ def main():
         distances = cdist(features, features, "canberra")
         error = np.median(np.median(np.abs(features / reference - 1)[:, :20], axis=1))
         print(f"| {label} | {loo_1nn(distances, y):.3f} | {error:.3f} |", flush=True)
+    first = np.array([[s["the mesh's L and M"][0], s["ours"][0]] for s in spectra])
+    print("\nFirst eigenvalue x area, the mesh's and ours, where ours is farthest above:")
+    for i in np.argsort(first[:, 0] / first[:, 1])[:5]:
+        print(f"- sample {i} ({names[y[i]]}): {first[i, 0]:.1f} and {first[i, 1]:.1f}")
 
     signatures = [signature_fields(d) for d in decimated]
     usable = np.flatnonzero([f is not None for f in signatures])
