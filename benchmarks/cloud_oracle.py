@@ -192,9 +192,10 @@ def around(points, faces, ratio=2.0):
     return mask
 
 
-def operators(mesh):
-    """Shape-DNA of each pencil on the decimated mesh's vertices (in the unit box), the
-    mesh cleaned first (decimation can leave degenerate faces)."""
+def pencils(mesh):
+    """The cleaned decimated mesh's vertices (in the unit box) and faces, and the pencils
+    ``(L, M)`` built on those vertices: the mesh's, ours, robust-laplacian's and the
+    two mixtures (decimation can leave degenerate faces, hence the cleaning)."""
     unit = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshCleaningWarning)
@@ -202,20 +203,30 @@ def operators(mesh):
     points, faces = clean.vertices, clean.faces
     L_mesh, M_mesh = cotangent_laplacian(points, faces)
     L_ours, M_ours = point_cloud_laplacian(points)
+    return (
+        points,
+        faces,
+        {
+            "the mesh's L and M": (L_mesh, M_mesh),
+            "ours": (L_ours, M_ours),
+            "robust-laplacian": robust(points),
+            "the mesh's L, our M": (L_mesh, M_ours),
+            "our L, the mesh's M": (L_ours, M_mesh),
+        },
+    )
+
+
+def operators(points, faces, built):
+    """Shape-DNA of each pencil of :func:`pencils`, and of the two oracles."""
     normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
-    return {
-        "the mesh's L and M": shape_dna(L_mesh, M_mesh),
-        "ours": shape_dna(L_ours, M_ours),
-        "robust-laplacian": shape_dna(*robust(points)),
-        "the mesh's L, our M": shape_dna(L_mesh, M_ours),
-        "our L, the mesh's M": shape_dna(L_ours, M_mesh),
-        "ours, neighbours facing away (mesh normals) left out": shape_dna(
-            *with_neighbours_left_out(points, facing_away(normals))
-        ),
-        "ours, neighbours 2x farther along the mesh left out": shape_dna(
-            *with_neighbours_left_out(points, around(points, faces))
-        ),
-    }
+    spectra = {label: shape_dna(L, M) for label, (L, M) in built.items()}
+    spectra["ours, neighbours facing away (mesh normals) left out"] = shape_dna(
+        *with_neighbours_left_out(points, facing_away(normals))
+    )
+    spectra["ours, neighbours 2x farther along the mesh left out"] = shape_dna(
+        *with_neighbours_left_out(points, around(points, faces))
+    )
+    return spectra
 
 
 def without_negative_weights(L):
@@ -227,28 +238,18 @@ def without_negative_weights(L):
     return (sp.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights).tocsr()
 
 
-def signature_fields(mesh):
+def signature_fields(points, faces, built):
     """The default's signature (log-HKS at 5 times from 48 eigenpairs, unit area) from
-    six pencils on the cleaned decimated mesh's vertices, each on the mesh's faces (the
-    complex held fixed), or None where one of them leaves a vertex without mass or
-    splits (the fields would not be comparable)."""
-    unit = unit_box(np.asarray(mesh.vertices, dtype=np.float64))[0]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MeshCleaningWarning)
-        clean = clean_mesh(unit, np.asarray(mesh.faces))
-    points, faces = clean.vertices, clean.faces
-    L_mesh, M_mesh = cotangent_laplacian(points, faces)
-    L_ours, M_ours = point_cloud_laplacian(points)
-    pencils = {
-        "the mesh's L and M": (L_mesh, M_mesh),
-        "ours": (L_ours, M_ours),
-        "robust-laplacian": robust(points),
-        "the mesh's L, our M": (L_mesh, M_ours),
-        "our L, the mesh's M": (L_ours, M_mesh),
+    each pencil of :func:`pencils` and from our stiffness without its negative weights,
+    each on the mesh's faces (the complex held fixed), or None where one of them leaves
+    a vertex without mass or splits (the fields would not be comparable)."""
+    L_ours, M_ours = built["ours"]
+    all_pencils = {
+        **built,
         "ours, negative weights set to 0": (without_negative_weights(L_ours), M_ours),
     }
     fields = {}
-    for label, (L, M) in pencils.items():
+    for label, (L, M) in all_pencils.items():
         L, M = sp.csr_matrix(L), sp.dia_matrix(M)
         if (M.diagonal() <= 0).any() or connected_components(abs(L) > 0, directed=False)[0] > 1:
             return None
@@ -340,7 +341,8 @@ def main():
         per_time = ord1_per_time(kept, y[same])
         print(f"| {label} | {' | '.join(f'{score:.3f}' for score in per_time)} |", flush=True)
 
-    spectra = [operators(d) for d in decimated]
+    built = [pencils(d) for d in decimated]
+    spectra = [operators(*b) for b in built]
     print(
         f"\nThe operator alone on the decimated vertices: Shape-DNA ({N_EIGENVALUES} "
         "eigenvalues x area, Canberra), leave-one-out 1-NN, and the median over the shapes "
@@ -358,7 +360,7 @@ def main():
     for i in np.argsort(first[:, 0] / first[:, 1])[:5]:
         print(f"- sample {i} ({names[y[i]]}): {first[i, 0]:.1f} and {first[i, 1]:.1f}")
 
-    signatures = [signature_fields(d) for d in decimated]
+    signatures = [signature_fields(*b) for b in built]
     usable = np.flatnonzero([f is not None for f in signatures])
     print(
         f"\n`ord1` of the signature of each pencil, on the mesh's faces, on the {len(usable)} "
