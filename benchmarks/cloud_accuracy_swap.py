@@ -7,9 +7,10 @@
 ``2eb9ede``'s: the Delaunay fan of all 30 neighbours in the principal plane of all 30,
 measured in that plane) or ``robust`` (robust-laplacian's, 30 neighbours, in place of
 ``point_cloud_laplacian``; the complex stays ours); ``COMPLEX`` is ``new`` (the edges
-of the operator's local triangles), ``knn`` (the symmetric 10-nearest-neighbour graph
-of ``2eb9ede``) or ``sheet`` (the triangles' edges and each point's 10 nearest
-neighbours that the operator keeps on its sheet). The same clouds as
+of the operator's local triangles: with ``old``, the old fans'), ``knn`` (the
+symmetric 10-nearest-neighbour graph of ``2eb9ede``) or ``sheet`` (the triangles'
+edges and each point's 10 nearest neighbours that the operator keeps on its sheet),
+put in place of each field's edges after the eigen stage. The same clouds as
 ``learning_quality.py`` (seed = the mesh's index) go through ``make_mesh_distance()``;
 printed: leave-one-out 1-NN, and, beside the meshes' distance matrix without essential
 H1 (what a cloud's diagrams can hold), the Spearman correlation of the two matrices and
@@ -19,6 +20,7 @@ solves are cached in folders of their own (``DIR/old-operator``,
 """
 
 import argparse
+import dataclasses
 import warnings
 from pathlib import Path
 
@@ -37,12 +39,11 @@ from sklearn_meshph.pointcloud._triangulation import (
     nearest,
     surface_neighbours,
 )
-from sklearn_meshph.spectral import transformer as spectral_transformer
 
 NO_EXT1 = {"ext0": 0.5, "ext1": 0.0, "dna": 0.5}
 
 
-def old_tangent_fans(points, n_neighbors=30):
+def old_tangent_fans(points, n_neighbors=30, knn=None):
     """The fans of commit 2eb9ede, with a zero height (the new operator's 3-D edges)."""
     _, neighbors = nearest(points, n_neighbors)
     relative = points[neighbors] - points[:, None, :]
@@ -59,14 +60,16 @@ def old_tangent_fans(points, n_neighbors=30):
     return triangles, np.hstack([a[keep], zero]), np.hstack([b[keep], zero])
 
 
-def robust_operator(points, n_neighbors=30):
-    """robust-laplacian's point-cloud operator (ours on pieces too small for it)."""
+def robust_operator(points, n_neighbors=30, *, knn=None):
+    """robust-laplacian's point-cloud operator (ours on pieces too small for it), and our
+    local triangles (the complex)."""
     import robust_laplacian
 
+    ours = cloud_laplacians.cloud_operator(points, knn=knn)
     if len(points) <= 2 * n_neighbors:
-        return cloud_laplacians.point_cloud_laplacian(points)
+        return ours
     L, M = robust_laplacian.point_cloud_laplacian(points, n_neighbors=n_neighbors)
-    return L.tocsr(), M
+    return L.tocsr(), M, ours[2]
 
 
 def sheet_graph(points, width=10):
@@ -98,10 +101,6 @@ def main():
             "cotangent", robust_operator, "robust-laplacian's"
         )
         memory = None if memory is None else str(Path(memory) / "robust-operator")
-    if args.complex != "new":
-        spectral_transformer.surface_graph = (
-            cloud_graph.knn_graph if args.complex == "knn" else sheet_graph
-        )
     bunch = load_mesh_folder(DATA / args.collection)
     y = np.asarray(bunch.target)
     keep = np.arange(len(y))
@@ -109,9 +108,14 @@ def main():
         keep = np.concatenate([np.flatnonzero(y == c)[: args.per_class] for c in np.unique(y)])
     meshes, y = [bunch.data[i] for i in keep], y[keep]
     clouds = [sample_point_cloud(m, args.points, random_state=k) for k, m in enumerate(meshes)]
+    pipeline = make_mesh_distance(memory=memory, n_jobs=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshCleaningWarning)
-        matrix = make_mesh_distance(memory=memory, n_jobs=1).fit_transform(clouds)
+        fields = pipeline[:1].fit_transform(clouds)
+    if args.complex != "new":
+        complex_of = cloud_graph.knn_graph if args.complex == "knn" else sheet_graph
+        fields = [dataclasses.replace(f, edges=complex_of(f.vertices)) for f in fields]
+    matrix = pipeline[1:].fit_transform(fields)
     reference = (
         make_mesh_distance(memory=args.cache, n_jobs=1)
         .set_params(distance__weights=NO_EXT1)

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 import pytest
 import scipy.linalg
+import scipy.sparse as sp
 import trimesh
 from conftest import irregular_ellipsoid
 from scipy.spatial.distance import cdist
@@ -33,8 +34,13 @@ from sklearn_meshph import (
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import unit_box
-from sklearn_meshph.pointcloud.graph import GRAPH_NEIGHBORS, knn_graph, surface_graph
-from sklearn_meshph.pointcloud.laplacians import CLOUD_LAPLACIANS
+from sklearn_meshph.pointcloud.graph import (
+    GRAPH_NEIGHBORS,
+    canonical_order,
+    knn_graph,
+    surface_graph,
+)
+from sklearn_meshph.pointcloud.laplacians import CLOUD_LAPLACIANS, cloud_operator
 from sklearn_meshph.spectral.cache import CacheWarning
 from sklearn_meshph.spectral.laplacians import LAPLACIANS
 
@@ -407,6 +413,46 @@ def test_the_cache_refuses_a_cloud_entry_with_faces(tmp_path, sampled):
     with pytest.warns(CacheWarning, match="do not fit the point cloud"):
         (field,) = estimator.fit_transform([sampled])
     assert len(field.faces) == 0
+
+
+def _tamper_edges(folder, edit):
+    (path,) = folder.rglob("edges.npy")
+    edges = np.load(path)
+    np.save(path, edit(edges))
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        pytest.param(lambda e: e + len(e), id="out of range"),
+        pytest.param(lambda e: e[::-1].copy(), id="unsorted"),
+        pytest.param(lambda e: e[:, ::-1].copy(), id="reversed ends"),
+        pytest.param(lambda e: np.vstack([e, e]), id="repeated"),
+        pytest.param(lambda e: e.astype(np.float64), id="float"),
+        pytest.param(lambda e: np.zeros((10**6, 2), np.int64), id="too many"),
+    ],
+)
+def test_the_cache_refuses_a_tampered_cloud_complex(tmp_path, sampled, edit):
+    first = fields([sampled], memory=str(tmp_path), eigen_index=1)[0]
+    _tamper_edges(tmp_path, edit)
+    estimator = LaplacianEigenTransformer(memory=str(tmp_path), eigen_index=1)
+    with pytest.warns(CacheWarning, match="recomputed"):
+        (field,) = estimator.fit_transform([sampled])
+    np.testing.assert_array_equal(field.edges, first.edges)
+
+
+def test_the_complex_is_the_edges_of_the_operators_triangles(sampled):
+    (field,) = fields([sampled], eigen_index=1)
+    order = canonical_order(sampled)
+    L, _, triangles = cloud_operator(unit_box(sampled[order])[0])
+    a = order[triangles[:, [0, 1, 2]].ravel()]
+    b = order[triangles[:, [1, 2, 0]].ravel()]
+    expected = np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)
+    np.testing.assert_array_equal(field.edges, expected)
+    # and those are the couplings of the operator, nothing more
+    coupled = sp.triu(L, 1).tocoo()
+    pairs = np.sort(np.column_stack([order[coupled.row], order[coupled.col]]), axis=1)
+    assert {tuple(p) for p in pairs} <= {tuple(e) for e in expected}
 
 
 def test_clone_and_pickle(estimator_round_trip, sampled):

@@ -153,6 +153,10 @@ class CleanMesh:
         the kept vertices up with the input's vertices (where not -1).
     report : CleaningReport
         What was welded and dropped, and why.
+    edges : ndarray of shape (k, 2) or None
+        A cleaned point cloud's persistence complex: the edges (``a < b``, sorted, each
+        once) of the local triangles its operator was built from. None for a mesh,
+        whose complex is its faces.
     """
 
     vertices: np.ndarray
@@ -160,6 +164,7 @@ class CleanMesh:
     vertex_indices: np.ndarray
     input_to_kept: np.ndarray = field(default=None, repr=False)
     report: CleaningReport | None = field(default=None, repr=False)
+    edges: np.ndarray | None = field(default=None, repr=False)
 
 
 @validate_params(

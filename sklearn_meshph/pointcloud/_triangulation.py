@@ -88,7 +88,7 @@ def _relative(points, neighbors, block):
     return points[neighbors[block]] - points[block][:, None, :]
 
 
-def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
+def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=None):
     """Each point's nearest neighbours, which of them are on its own sheet, and its frame.
 
     The ``n_neighbors`` nearest points may reach across a thin part (the other side of a
@@ -101,9 +101,10 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
 
     Returns ``(neighbors, usable, normal, basis)``: indices ``(n, k)``, the mask of the
     neighbours kept ``(n, k)``, unit normals ``(n, 3)`` and tangent bases
-    ``(n, 3, 2)``.
+    ``(n, 3, 2)``. ``knn``: :func:`nearest`'s result for these points and
+    ``n_neighbors``, when the caller has it.
     """
-    distances, neighbors = nearest(points, n_neighbors)
+    distances, neighbors = nearest(points, n_neighbors) if knn is None else knn
     n, k = neighbors.shape
     first = min(NORMAL_NEIGHBORS, k)
     reach = np.maximum(distances, distances[:, first - 1 : first])
@@ -143,7 +144,7 @@ def _heights(coords, height, usable, unit):
     return (_along(terms, coefficients) - coefficients[:, :1]) * unit
 
 
-def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
+def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=None):
     """Every point's local Delaunay triangles among its surface neighbours.
 
     The neighbours kept by :func:`surface_neighbours` are projected onto the point's
@@ -155,9 +156,9 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS):
     the edge vectors from ``i`` to ``j`` and to ``k`` in that frame, ``(m, 3)`` each.
     Degenerate triangles (twice the area at most
     :data:`sklearn_meshph.mesh.DEGENERATE_SINE` times the longest edge squared) are
-    dropped. ``points`` must be distinct.
+    dropped. ``points`` must be distinct; ``knn`` as for :func:`surface_neighbours`.
     """
-    neighbors, usable, normal, basis = surface_neighbours(points, n_neighbors)
+    neighbors, usable, normal, basis = surface_neighbours(points, n_neighbors, knn)
     n, k = neighbors.shape
     coords, lift = np.empty((n, k, 2)), np.empty((n, k))
     for block in _blocks(n):

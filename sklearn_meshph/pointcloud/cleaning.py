@@ -14,6 +14,7 @@ from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, weld_vertices
+from ._triangulation import LOCAL_NEIGHBORS, nearest
 from .graph import canonical_order, neighbourhood_components, sparse_outliers
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
@@ -44,8 +45,10 @@ def _far_components(points, laplacian, components, place):
     """Drop the points far from the rest (:func:`.graph.neighbourhood_components`): the
     component of largest area is kept, its operator built without the others; then the
     outliers of that component (:func:`.graph.sparse_outliers`), each a component of its
-    own. Returns ``(kept, L, M, n_other, share)``."""
-    n_components, labels = neighbourhood_components(points)
+    own. Returns ``(kept, L, M, triangles, n_other, share)``."""
+    # One neighbour search serves every step while no point is dropped.
+    knn = nearest(points, LOCAL_NEIGHBORS)
+    n_components, labels = neighbourhood_components(points, knn)
     build = CLOUD_LAPLACIANS[laplacian].value
     kept, operator, n_other, share = np.ones(len(points), dtype=bool), None, 0, 0.0
     if n_components > 1:
@@ -68,7 +71,8 @@ def _far_components(points, laplacian, components, place):
             )
         kept, n_other, share = _largest(labels, area)
         operator = operators[int(labels[np.argmax(kept)])]
-    outliers = np.flatnonzero(kept)[sparse_outliers(points[kept])]
+    whole = n_components == 1
+    outliers = np.flatnonzero(kept)[sparse_outliers(points[kept], knn if whole else None)]
     if len(outliers):
         if components == "error":
             raise ValueError(
@@ -79,8 +83,21 @@ def _far_components(points, laplacian, components, place):
         kept[outliers] = False
         operator, n_other = None, n_other + len(outliers)
     if operator is None:
-        operator = build(points[kept])
+        operator = build(points[kept], knn=knn if kept.all() else None)
     return kept, *operator, n_other, share
+
+
+def _edges(triangles: np.ndarray, renumber: np.ndarray) -> np.ndarray:
+    """The edges ``(m, 2)`` (``a < b``, sorted, each once) of ``triangles`` renumbered by
+    ``renumber`` (-1: a dropped point, whose triangles are left out)."""
+    corners = renumber[triangles]
+    corners = corners[(corners >= 0).all(axis=1)]
+    a = corners[:, [0, 1, 2]].ravel()
+    b = corners[:, [1, 2, 0]].ravel()
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    n = max(int(renumber.max()) + 1, 1)
+    codes = np.unique(low * n + high)  # one integer per edge: a fast unique
+    return np.column_stack([codes // n, codes % n])
 
 
 def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | None, weld: bool):
@@ -112,8 +129,10 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
 
     Returns ``(clean, L, M, solve_points, to_output)``: ``clean`` a
     :class:`CleanMesh` without faces whose vertices are the kept input points in input
-    order, the operator on the kept points in solve (canonical) order, their unit-box
-    coordinates, and the permutation taking solve order to output order.
+    order and whose ``edges`` are the cloud's persistence complex (the edges of the
+    local triangles the operator was built from, between kept points), the operator
+    on the kept points in solve (canonical) order, their unit-box coordinates, and the
+    permutation taking solve order to output order.
     """
     place = where(index, "point cloud")
     n_input = len(points)
@@ -127,7 +146,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
             f"{MIN_POINTS} are needed"
         )
     _refuse_degenerate(canonical[distinct], place)
-    near, L, M, n_far, far_share = _far_components(
+    near, L, M, triangles, n_far, far_share = _far_components(
         canonical[distinct], laplacian, components, place
     )
     solve_points = canonical[distinct[near]]
@@ -173,6 +192,12 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     input_to_kept = np.empty(n_input, dtype=np.int64)
     input_to_kept[order] = output_of_distinct[np.searchsorted(distinct, representative)]
 
+    # The complex: the edges of the operator's triangles between kept points, numbered
+    # as the output (the triangles are numbered as the points the operator was built on).
+    output_of_built = np.full(len(referenced), -1, dtype=np.int64)
+    output_of_built[kept] = output_of_solve
+    edges = _edges(triangles, output_of_built)
+
     n_unreferenced = int(np.count_nonzero(~referenced))
     report = CleaningReport(
         n_input_vertices=n_input,
@@ -193,5 +218,6 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
         vertex_indices=vertex_indices,
         input_to_kept=input_to_kept,
         report=report,
+        edges=edges,
     )
     return clean, L, M, solve_points, to_output

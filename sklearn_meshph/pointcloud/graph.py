@@ -95,7 +95,7 @@ def surface_graph(points: np.ndarray) -> np.ndarray:
     return np.unique(edges[edges[:, 0] != edges[:, 1]], axis=0)
 
 
-def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
+def neighbourhood_components(points: np.ndarray, knn=None) -> tuple[int, np.ndarray]:
     """Connected components of the kNN graph without its long edges.
 
     The neighbourhood radius of a point is the distance to its ``GRAPH_NEIGHBORS``-th
@@ -109,12 +109,13 @@ def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
 
     Returns ``(n_components, labels)`` as
     :func:`sklearn_meshph.mesh.graph.connected_components` does (labels in the order
-    of each component's lowest index). ``points`` must be distinct.
+    of each component's lowest index). ``points`` must be distinct. ``knn``: the
+    points' :func:`nearest` for at least ``GRAPH_NEIGHBORS`` neighbours, when known.
     """
     n = len(points)
     if n < 2:
         return n, np.zeros(n, dtype=np.int64)
-    distances, indices = nearest(points, GRAPH_NEIGHBORS)
+    distances, indices = _nearest(points, knn)
     radius = distances[:, -1]
     a = np.repeat(np.arange(n), indices.shape[1])
     b = indices.ravel()
@@ -122,7 +123,16 @@ def neighbourhood_components(points: np.ndarray) -> tuple[int, np.ndarray]:
     return connected_components(n, np.column_stack([a[short], b[short]]))
 
 
-def sparse_outliers(points: np.ndarray) -> np.ndarray:
+def _nearest(points, knn):
+    """The ``GRAPH_NEIGHBORS`` nearest of each point: the first columns of ``knn`` (a
+    :func:`nearest` for more neighbours) when given, else a search."""
+    if knn is None:
+        return nearest(points, GRAPH_NEIGHBORS)
+    distances, indices = knn
+    return distances[:, :GRAPH_NEIGHBORS], indices[:, :GRAPH_NEIGHBORS]
+
+
+def sparse_outliers(points: np.ndarray, knn=None) -> np.ndarray:
     """The mask of the points standing alone off the surface, for the sampling around them.
 
     The neighbourhood radius of a point is the distance to its ``GRAPH_NEIGHBORS``-th
@@ -142,12 +152,13 @@ def sparse_outliers(points: np.ndarray) -> np.ndarray:
     sparse ones whose radius is as long as its own. Two outliers near each other do
     not vouch for each other, as candidates do not count in step 2. Ratios of lengths
     only: the same at any scale and density. Fewer than ``GRAPH_NEIGHBORS + 1`` points
-    have no neighbourhoods to compare: none is an outlier. ``points`` must be distinct.
+    have no neighbourhoods to compare: none is an outlier. ``points`` must be distinct;
+    ``knn`` as for :func:`neighbourhood_components`.
     """
     n = len(points)
     if n <= GRAPH_NEIGHBORS:
         return np.zeros(n, dtype=bool)
-    distances, indices = nearest(points, GRAPH_NEIGHBORS)
+    distances, indices = _nearest(points, knn)
     radius = distances[:, -1]
     around = radius[indices]
     candidate = radius > OUTLIER_RATIO * np.median(around, axis=1)

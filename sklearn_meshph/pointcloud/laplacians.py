@@ -30,7 +30,13 @@ from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
 from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph
 from .validation import MIN_POINTS
 
-__all__ = ["CLOUD_LAPLACIANS", "LOCAL_NEIGHBORS", "point_cloud_laplacian", "tangent_fans"]
+__all__ = [
+    "CLOUD_LAPLACIANS",
+    "LOCAL_NEIGHBORS",
+    "cloud_operator",
+    "point_cloud_laplacian",
+    "tangent_fans",
+]
 
 
 @validate_params({"n_neighbors": [Interval(Integral, 3, None, closed="left")]})
@@ -94,8 +100,21 @@ def point_cloud_laplacian(
         raise ValueError(
             f"points: a point cloud needs at least {MIN_POINTS} points, got {len(points)}"
         )
+    L, M, _ = cloud_operator(points, n_neighbors)
+    return L, M
+
+
+def cloud_operator(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, *, knn=None):
+    """:func:`point_cloud_laplacian` on checked points, and the triangles it sums.
+
+    Returns ``(L, M, triangles)``, ``triangles`` an ``(m, 3)`` array of point indices:
+    every local triangle of every point's fan (:func:`tangent_fans`), each as often as
+    fans hold it. Their edges are a cloud's persistence complex, so the complex joins
+    exactly the points the operator couples. ``knn``: the points' ``n_neighbors``
+    nearest (:func:`._triangulation.nearest`), when the caller has them.
+    """
     n = len(points)
-    triangles, a, b = tangent_fans(points, n_neighbors)
+    triangles, a, b = tangent_fans(points, n_neighbors, knn)
     double_area = np.linalg.norm(np.cross(a, b), axis=1)
     # The cotangent of a corner is the dot product of its two edges over twice the
     # area; an edge weighs half the cotangent of the corner opposite it.
@@ -114,7 +133,7 @@ def point_cloud_laplacian(
     L = sp.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights
     mass = np.bincount(triangles.ravel(), weights=np.repeat(double_area / 6, 3), minlength=n)
     # A triangle on which the neighbourhoods agree is in the fans of its three corners.
-    return (L / 3.0).tocsr(), sp.diags(mass / 3.0)
+    return (L / 3.0).tocsr(), sp.diags(mass / 3.0), triangles
 
 
 def _graph(points):
@@ -123,31 +142,44 @@ def _graph(points):
     return (sp.diags(degree) - adjacency).tocsr(), sp.identity(len(points), format="dia")
 
 
+def _with_fans(build):
+    """``build``'s ``(L, M)`` and the local triangles of :func:`tangent_fans`: a cloud's
+    complex is theirs whatever its operator."""
+
+    def operator(points, *, knn=None):
+        return (*build(points), tangent_fans(points, knn=knn)[0])
+
+    return operator
+
+
 #: The point-cloud discretization of each Laplacian of
-#: :data:`sklearn_meshph.spectral.laplacians.LAPLACIANS`, by the same name.
+#: :data:`sklearn_meshph.spectral.laplacians.LAPLACIANS`, by the same name. Each value
+#: takes checked points (at least ``MIN_POINTS``; keyword ``knn``: their
+#: ``LOCAL_NEIGHBORS`` nearest, if known) and returns ``(L, M, triangles)``: the
+#: operator, and the local triangles whose edges are the cloud's persistence complex.
 CLOUD_LAPLACIANS = Registry(
     "laplacian",
     [
         Option(
             "cotangent",
-            point_cloud_laplacian,
+            cloud_operator,
             "cotangent Laplace-Beltrami operator of the local Delaunay triangulations "
             "of 30 neighbours, each in its tangent plane",
         ),
         Option(
             "graph",
-            _graph,
+            _with_fans(_graph),
             "combinatorial graph Laplacian `D - A` of the symmetric 10-nearest-neighbour "
             "graph, `M = I`",
         ),
         Option(
             "normalized",
-            from_combinatorial(normalized_laplacian, _graph),
+            _with_fans(from_combinatorial(normalized_laplacian, _graph)),
             "symmetric normalized Laplacian `I - D^-1/2 A D^-1/2` of the graph of `graph`",
         ),
         Option(
             "random_walk",
-            from_combinatorial(random_walk_laplacian, _graph),
+            _with_fans(from_combinatorial(random_walk_laplacian, _graph)),
             "random-walk Laplacian `I - D^-1 A` of the graph of `graph`, `M = D`",
         ),
     ],

@@ -2,7 +2,8 @@
 
 Each entry is a folder ``<location>/sklearn_meshph_eigen/<key>/`` holding
 ``header.json`` (the format, the key, the cleaning report) and one ``.npy`` file per
-array (the cleaned vertices, faces and index maps, the eigenvalues and eigenvectors).
+array (the cleaned vertices, faces and index maps, the eigenvalues and eigenvectors,
+and a point cloud's complex: the edges of its operator's triangles).
 A point cloud's entry has no faces (an empty ``(0, 3)`` array) and a graph's neither,
 with nodes of no coordinates (``(n, 0)`` vertices): each is accepted only where its kind
 is looked up, and a mesh's entry only where a mesh is. A graph is keyed on its node
@@ -39,6 +40,7 @@ import numpy as np
 
 from .._version import VERSION
 from ..mesh.cleaning import CleaningReport, CleanMesh
+from ..pointcloud.laplacians import LOCAL_NEIGHBORS
 
 __all__ = [
     "NUMERICS_FILES",
@@ -51,7 +53,7 @@ __all__ = [
 ]
 
 #: Bumped whenever the numbers a solve gives may change (cleaning, assembly, solver).
-NUMERICS_VERSION = 13
+NUMERICS_VERSION = 14
 
 #: The modules whose changes must bump NUMERICS_VERSION (relative to the package).
 NUMERICS_FILES = (
@@ -75,7 +77,7 @@ NUMERICS_FILES = (
     "pointcloud/_triangulation.py",
 )
 
-_FORMAT = "sklearn-meshph eigen cache 1"
+_FORMAT = "sklearn-meshph eigen cache 2"
 _FOLDER = "sklearn_meshph_eigen"
 _MAX_HEADER = 1 << 16  # bytes
 _STALE_TEMPORARY = 3600.0  # seconds after which a temporary folder is an orphan
@@ -282,16 +284,26 @@ class EigenCache:
         n = _count(header, "n_vertices")
         k = _count(header, "n_pairs")
         faces_size = _count(header, "n_faces") * 3
+        edges_size = _count(header, "n_edges") * 2
         faceless = points or graph
-        if not (0 < n <= n_input and 0 < k <= min(n, max_pairs) and (faces_size == 0) == faceless):
+        # A fan has at most LOCAL_NEIGHBORS + 4 triangles: at most 3 (k + 4) n edges.
+        max_edges = min(n * (n - 1) // 2, 3 * (LOCAL_NEIGHBORS + 4) * n) if points else 0
+        if not (
+            0 < n <= n_input
+            and 0 < k <= min(n, max_pairs)
+            and (faces_size == 0) == faceless
+            and edges_size // 2 <= max_edges
+        ):
             kind = "graph" if graph else "point cloud" if points else "mesh"
             raise ValueError(
-                f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces do not fit the {kind}"
+                f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces, {edges_size // 2} "
+                f"edges do not fit the {kind}"
             )
         vertices = _read_array(entry / "vertices.npy", np.float64, 3 * n, 2)
         faces = _read_array(entry / "faces.npy", np.int64, faces_size, 2)
         indices = _read_array(entry / "vertex_indices.npy", np.int64, n, 1)
         to_kept = _read_array(entry / "input_to_kept.npy", np.int64, n_input, 1)
+        edges = _read_array(entry / "edges.npy", np.int64, edges_size, 2)
         values = _read_array(entry / "values.npy", np.float64, k, 1)
         vectors = _read_array(entry / "vectors.npy", np.float64, n * k, 2)
         checks = {
@@ -302,6 +314,16 @@ class EigenCache:
             and ((indices >= 0) & (indices < n_input)).all(),
             "input_to_kept": to_kept.shape == (n_input,)
             and ((to_kept >= -1) & (to_kept < n)).all(),
+            "edges": edges.shape == (edges_size // 2, 2)
+            and (
+                len(edges) == 0
+                or (
+                    (edges[:, 0] >= 0).all()
+                    and (edges[:, 0] < edges[:, 1]).all()
+                    and (edges[:, 1] < n).all()
+                    and (np.diff(edges[:, 0] * n + edges[:, 1]) > 0).all()
+                )
+            ),
             "values": values.shape == (k,) and np.isfinite(values).all(),
             "vectors": vectors.shape == (n, k) and np.isfinite(vectors).all(),
         }
@@ -309,7 +331,14 @@ class EigenCache:
         if bad:
             raise ValueError(f"inconsistent arrays: {', '.join(bad)}")
         report = _report(header["report"])
-        clean = CleanMesh(vertices, faces, indices, input_to_kept=to_kept, report=report)
+        clean = CleanMesh(
+            vertices,
+            faces,
+            indices,
+            input_to_kept=to_kept,
+            report=report,
+            edges=edges if points else None,
+        )
         return clean, values, vectors
 
     def store(self, key: str, result) -> None:
@@ -327,6 +356,7 @@ class EigenCache:
                 "key": key,
                 "n_vertices": len(clean.vertices),
                 "n_faces": len(clean.faces),
+                "n_edges": 0 if clean.edges is None else len(clean.edges),
                 "n_pairs": len(values),
                 "report": {
                     name: getattr(clean.report, name) for name in clean.report.__dataclass_fields__
@@ -338,10 +368,16 @@ class EigenCache:
                 "faces": clean.faces,
                 "vertex_indices": clean.vertex_indices,
                 "input_to_kept": clean.input_to_kept,
+                "edges": np.empty((0, 2)) if clean.edges is None else clean.edges,
                 "values": values,
                 "vectors": vectors,
             }
-            dtypes = {"faces": np.int64, "vertex_indices": np.int64, "input_to_kept": np.int64}
+            dtypes = {
+                "faces": np.int64,
+                "vertex_indices": np.int64,
+                "input_to_kept": np.int64,
+                "edges": np.int64,
+            }
             for name, array in arrays.items():
                 array = np.ascontiguousarray(array, dtype=dtypes.get(name, np.float64))
                 np.save(temporary / f"{name}.npy", array, allow_pickle=False)

@@ -21,7 +21,6 @@ from ..graph.validation import Graph
 from ..inputs import check_input
 from ..mesh.cleaning import describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
-from ..pointcloud.graph import surface_graph
 from .cache import EigenCache, cache_of
 from .eigensolver import COMPONENTS
 from .factorization import SOLVERS
@@ -524,9 +523,9 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
             values = values[:n_kept]
         identity = len(clean.vertices) == report.n_input_vertices
         if not graph and len(clean.faces) == 0:
-            # A cloud's complex is the edges of its local triangles, built here from the
-            # kept points (the same whether the solve came from the cache or not).
-            edges = surface_graph(clean.vertices)
+            # A cloud's complex: the edges of the local triangles its operator was built
+            # from (stored with the solve in the cache).
+            edges = clean.edges
         return ScalarField(
             vertices=clean.vertices,
             faces=clean.faces,
