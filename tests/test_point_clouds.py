@@ -153,6 +153,9 @@ def test_a_permutation_permutes_the_output_exactly(sampled):
     first, permuted = fields([sampled, sampled[order]])
     np.testing.assert_array_equal(permuted.values, first.values[order])
     np.testing.assert_array_equal(permuted.eigenvalues, first.eigenvalues)
+    mapped = np.sort(order[permuted.edges], axis=1)
+    mapped = mapped[np.lexsort((mapped[:, 1], mapped[:, 0]))]
+    np.testing.assert_array_equal(mapped, first.edges)
     for a, b in zip(*LowerStarPersistence().fit_transform([first, permuted]), strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -439,6 +442,15 @@ def test_the_cache_refuses_a_tampered_cloud_complex(tmp_path, sampled, edit):
     with pytest.warns(CacheWarning, match="recomputed"):
         (field,) = estimator.fit_transform([sampled])
     np.testing.assert_array_equal(field.edges, first.edges)
+
+
+def test_the_complex_of_a_cleaned_cloud_joins_kept_points_only(sampled):
+    stray = np.vstack([sampled, sampled.mean(axis=0) + 10 * np.ptp(sampled, axis=0)])
+    (field,) = fields([stray], eigen_index=1)  # one point dropped: too few to warn
+    assert len(field.vertices) == len(sampled)
+    assert field.edges.max() < len(field.vertices)
+    (clean,) = fields([sampled], eigen_index=1)
+    np.testing.assert_array_equal(field.edges, clean.edges)
 
 
 def test_the_complex_is_the_edges_of_the_operators_triangles(sampled):
