@@ -211,6 +211,9 @@ TAMPERED_HEADERS = {
     "a list": lambda h: [h],
     "a list report": lambda h: {**h, "report": list(h["report"].values())},
     "a string in the report": lambda h: {**h, "report": {**h["report"], "n_welded": "0"}},
+    "no edge count": lambda h: {k: v for k, v in h.items() if k != "n_edges"},
+    "a negative edge count": lambda h: {**h, "n_edges": -1},
+    "edges for a mesh": lambda h: {**h, "n_edges": 1},
 }
 
 
@@ -255,7 +258,7 @@ def test_a_deeply_nested_header_is_recomputed(tmp_path):
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs and symbolic links")
 @pytest.mark.parametrize("kind", ["fifo", "folder", "link"])
-@pytest.mark.parametrize("name", ["header.json", "values.npy", "vectors.npy"])
+@pytest.mark.parametrize("name", ["header.json", "values.npy", "vectors.npy", "edges.npy"])
 def test_only_regular_files_of_an_entry_are_opened(tmp_path, kind, name):
     first = solve(tmp_path)
     (entry,) = entries(tmp_path)

@@ -433,6 +433,8 @@ def _tamper_edges(folder, edit):
         pytest.param(lambda e: np.vstack([e, e]), id="repeated"),
         pytest.param(lambda e: e.astype(np.float64), id="float"),
         pytest.param(lambda e: np.zeros((10**6, 2), np.int64), id="too many"),
+        pytest.param(lambda e: e[:0], id="none"),
+        pytest.param(lambda e: e[e.max(axis=1) < e.max() - 5], id="points left out"),
     ],
 )
 def test_the_cache_refuses_a_tampered_cloud_complex(tmp_path, sampled, edit):
