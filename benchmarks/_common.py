@@ -27,7 +27,8 @@ def _status_mb(field):
 
 
 def peak_memory(func, *args):
-    """Peak resident-set growth (MB) while ``func`` runs (Linux: resets VmHWM first)."""
+    """Peak resident-set growth (MB, at least 0) while ``func`` runs (Linux: resets
+    VmHWM first)."""
     try:
         with open("/proc/self/clear_refs", "w") as refs:
             refs.write("5")
@@ -35,7 +36,7 @@ def peak_memory(func, *args):
         return float("nan")
     before = _status_mb("VmRSS")
     func(*args)
-    return _status_mb("VmHWM") - before
+    return max(0.0, _status_mb("VmHWM") - before)  # memory freed earlier is reused: no growth
 
 
 # Collections and 1-NN scores shared by learning_quality.py, gh_signatures.py,
