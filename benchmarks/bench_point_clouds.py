@@ -135,12 +135,16 @@ def _rank(target):
     return rank
 
 
-def timed(func, *args):
-    """(result, seconds) of one call, and the peak of the memory it allocates through
-    NumPy and Python (MB, tracemalloc; numba's arrays included) in a second call."""
-    start = time.perf_counter()
-    result = func(*args)
-    seconds = time.perf_counter() - start
+def timed(func, *args, repeats=3):
+    """(result, seconds) of the fastest of ``repeats`` calls (the others were slowed by
+    the machine, not by the code: one call moved the ratios by 0.2 between two runs),
+    and the peak of the memory it allocates through NumPy and Python (MB, tracemalloc;
+    numba's arrays included) in one more call."""
+    seconds = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = func(*args)
+        seconds = min(seconds, time.perf_counter() - start)
     tracemalloc.start()
     func(*args)
     peak = tracemalloc.get_traced_memory()[1] / 2**20

@@ -108,3 +108,62 @@ def test_the_complex_follows_the_operator_and_a_permutation():
     permuted = surface_graph(points[order])
     back = np.sort(order[permuted], axis=1)
     np.testing.assert_array_equal(back[np.lexsort(back.T[::-1])], edges)
+
+
+def _reference_frames(points, neighbors, distances, first=10, slope=0.7, cosine=0.5):
+    """The surface neighbours written with NumPy's ``eigh`` (the compiled kernels'
+    specification): the principal plane of the first nearest, refitted to the
+    neighbours low over it; kept: low over the refitted plane, normals within 60 deg."""
+    relative = points[neighbors] - points[:, None, :]
+    reach = np.maximum(distances, distances[:, first - 1 : first])
+
+    def frame(weights):
+        covariance = np.einsum("nk,nki,nkj->nij", weights, relative, relative)
+        return np.linalg.eigh(covariance)[1]
+
+    weights = np.zeros(neighbors.shape)
+    weights[:, :first] = 1.0
+    normal = frame(weights)[:, :, 0]
+    low = np.abs(np.einsum("nki,ni->nk", relative, normal)) <= slope * reach
+    directions = frame(low.astype(float))
+    normal = directions[:, :, 0]
+    low = np.abs(np.einsum("nki,ni->nk", relative, normal)) <= slope * reach
+    agree = np.abs(np.einsum("nki,ni->nk", normal[neighbors], normal)) >= cosine
+    return low & agree, normal, directions[:, :, 1:]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_compiled_frames_match_numpy_eigh(seed):
+    from sklearn_meshph.pointcloud._triangulation import nearest
+
+    points, _, _ = hairpin(1500, 0.08, seed=seed)
+    points = points + np.random.default_rng(seed).normal(scale=1e-3, size=points.shape)
+    distances, neighbors = nearest(points, 30)
+    usable, normal, basis = _reference_frames(points, neighbors, distances)
+    found_neighbors, found_usable, found_normal, found_basis = surface_neighbours(points)
+    np.testing.assert_array_equal(found_neighbors, neighbors)
+    np.testing.assert_array_equal(found_usable, usable)
+    # Normals up to sign, tangent planes equal (any orthonormal basis of them).
+    np.testing.assert_allclose(np.abs((found_normal * normal).sum(1)), 1.0, atol=1e-10)
+    gram = np.einsum("nik,nil->nkl", found_basis, found_basis)
+    np.testing.assert_allclose(gram, np.broadcast_to(np.eye(2), gram.shape), atol=1e-12)
+    projector = np.einsum("nik,njk->nij", basis, basis)
+    found_projector = np.einsum("nik,njk->nij", found_basis, found_basis)
+    np.testing.assert_allclose(found_projector, projector, atol=1e-9)
+    np.testing.assert_allclose(
+        np.abs(np.einsum("nik,ni->nk", found_basis, found_normal)), 0.0, atol=1e-12
+    )
+
+
+@pytest.mark.parametrize("dropped", [0, 1, 40, 1499])
+def test_nearest_within_a_subset_is_a_search_of_the_subset(dropped):
+    from sklearn_meshph.pointcloud._triangulation import nearest, nearest_within
+
+    rng = np.random.default_rng(dropped)
+    points = rng.random((1500, 3))
+    keep = np.ones(len(points), dtype=bool)
+    keep[rng.choice(len(points), dropped, replace=False)] = False
+    expected = nearest(points[keep], 30)
+    found = nearest_within(points, nearest(points, 30), keep, 30)
+    for a, b in zip(found, expected, strict=True):
+        np.testing.assert_array_equal(a, b)

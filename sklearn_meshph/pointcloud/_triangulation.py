@@ -18,9 +18,9 @@ __all__ = [
     "MAX_SLOPE",
     "MIN_NORMAL_COSINE",
     "NORMAL_NEIGHBORS",
-    "BLOCK",
     "local_delaunay_fans",
     "nearest",
+    "nearest_within",
     "surface_neighbours",
     "tangent_fans",
 ]
@@ -42,14 +42,13 @@ MAX_SLOPE = 0.7
 #: normals: the absolute cosine).
 MIN_NORMAL_COSINE = 0.5
 
-#: Points whose local frames are computed together.
-BLOCK = 4096
-
 
 def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarray]:
     """Distances and indices ``(n, k)`` of each point's ``k`` nearest other points,
     nearest first (``k = min(n_neighbors, n - 1)``), by an exact k-d tree search."""
     k = min(n_neighbors, len(points) - 1)
+    if k < 1:  # one point (or none): no neighbours
+        return np.empty((len(points), 0)), np.empty((len(points), 0), dtype=np.intp)
     distances, indices = cKDTree(points).query(points, k + 1)
     # The point itself comes first, unless a duplicate of it does: drop it wherever it is.
     itself = indices == np.arange(len(points))[:, None]
@@ -58,34 +57,137 @@ def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarra
     return distances[keep].reshape(-1, k), indices[keep].reshape(-1, k)
 
 
-def _frames(relative: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals ``(n, 3)`` and tangent bases ``(n, 3, 2)``: the principal directions
-    of the weighted neighbours, relative to each point (the plane goes through it)."""
-    covariance = np.matmul((relative * weights[..., None]).transpose(0, 2, 1), relative)
-    directions = np.linalg.eigh(covariance)[1]
-    return directions[:, :, 0], directions[:, :, 1:]
+def nearest_within(points, knn, keep, n_neighbors):
+    """:func:`nearest` of ``points[keep]`` for ``n_neighbors``, from ``knn``, that of all
+    the ``points`` for as many: a point none of whose nearest is dropped keeps them
+    (renumbered); only the others are searched again, among the kept points."""
+    distances, indices = knn
+    kept = np.flatnonzero(keep)
+    k = min(n_neighbors, len(kept) - 1)
+    if k != distances.shape[1]:  # fewer points than neighbours asked for
+        return nearest(points[kept], n_neighbors)
+    renumber = np.full(len(points), -1, dtype=np.int64)
+    renumber[kept] = np.arange(len(kept))
+    distances, indices = distances[kept], renumber[indices[kept]]
+    stale = np.flatnonzero((indices < 0).any(axis=1))
+    if len(stale):
+        subset = points[kept]
+        found, near = cKDTree(subset).query(subset[stale], k + 1)
+        itself = near == stale[:, None]
+        itself[~itself.any(axis=1), -1] = True
+        distances[stale] = found[~itself].reshape(-1, k)
+        indices[stale] = near[~itself].reshape(-1, k)
+    return distances, indices
 
 
-def _along(vectors, directions):
-    """``(n, k)`` components of ``vectors`` ``(n, k, 3)`` along ``directions`` ``(n, 3)``."""
-    return np.matmul(vectors, directions[..., None])[..., 0]
+@numba.njit(cache=True, inline="always")
+def _principal_frame(c, frame):
+    """The eigenvectors of the symmetric 3 x 3 ``c`` into the columns of ``frame``,
+    by increasing eigenvalue (cyclic Jacobi rotations; ``c`` is overwritten): column 0
+    is the normal of the principal plane, columns 1 and 2 span the plane."""
+    for r in range(3):
+        for q in range(3):
+            frame[r, q] = 1.0 if r == q else 0.0
+    for _ in range(64):
+        off = c[0, 1] * c[0, 1] + c[0, 2] * c[0, 2] + c[1, 2] * c[1, 2]
+        scale = c[0, 0] * c[0, 0] + c[1, 1] * c[1, 1] + c[2, 2] * c[2, 2]
+        if off <= 1e-32 * scale or off == 0.0:
+            break
+        for p, q in ((0, 1), (0, 2), (1, 2)):
+            if c[p, q] == 0.0:
+                continue
+            theta = (c[q, q] - c[p, p]) / (2.0 * c[p, q])
+            t = 1.0 / (abs(theta) + np.sqrt(theta * theta + 1.0))
+            if theta < 0.0:
+                t = -t
+            cos = 1.0 / np.sqrt(t * t + 1.0)
+            sin = t * cos
+            for r in range(3):  # columns p and q of c, then rows p and q
+                cp, cq = c[r, p], c[r, q]
+                c[r, p], c[r, q] = cos * cp - sin * cq, sin * cp + cos * cq
+            for r in range(3):
+                cp, cq = c[p, r], c[q, r]
+                c[p, r], c[q, r] = cos * cp - sin * cq, sin * cp + cos * cq
+            for r in range(3):
+                vp, vq = frame[r, p], frame[r, q]
+                frame[r, p], frame[r, q] = cos * vp - sin * vq, sin * vp + cos * vq
+    # Sort the columns by eigenvalue (on the diagonal of c; three: an insertion sort).
+    for a in range(1, 3):
+        b = a
+        while b > 0 and c[b, b] < c[b - 1, b - 1]:
+            c[b, b], c[b - 1, b - 1] = c[b - 1, b - 1], c[b, b]
+            for r in range(3):
+                frame[r, b], frame[r, b - 1] = frame[r, b - 1], frame[r, b]
+            b -= 1
 
 
-def _flat(relative, normal, reach):
-    """Neighbours whose height over the tangent plane is within ``MAX_SLOPE`` of their
-    ``reach`` (distance, at least the ``NORMAL_NEIGHBORS``-th neighbour's)."""
-    return np.abs(_along(relative, normal)) <= MAX_SLOPE * reach
+@numba.njit(cache=True, inline="always")
+def _weighted_frame(points, neighbors, i, take, c, frame):
+    """The principal frame of point ``i``'s neighbours where ``take`` (relative to it:
+    the plane goes through the point); ``c`` is a 3 x 3 work array."""
+    c[:, :] = 0.0
+    for j in range(neighbors.shape[1]):
+        if take[j]:
+            m = neighbors[i, j]
+            ux = points[m, 0] - points[i, 0]
+            uy = points[m, 1] - points[i, 1]
+            uz = points[m, 2] - points[i, 2]
+            c[0, 0] += ux * ux
+            c[0, 1] += ux * uy
+            c[0, 2] += ux * uz
+            c[1, 1] += uy * uy
+            c[1, 2] += uy * uz
+            c[2, 2] += uz * uz
+    c[1, 0], c[2, 0], c[2, 1] = c[0, 1], c[0, 2], c[1, 2]
+    _principal_frame(c, frame)
 
 
-def _blocks(n):
-    """Slices of at most :data:`BLOCK` points: the local frames of a block are computed
-    together, which bounds the temporary arrays (every point's result is the same)."""
-    return (slice(start, min(start + BLOCK, n)) for start in range(0, n, BLOCK))
+@numba.njit(cache=True)
+def _sheet_frames(points, neighbors, reach, first, max_slope):
+    """Normals ``(n, 3)`` and tangent bases ``(n, 3, 2)`` of :func:`surface_neighbours`:
+    the principal plane of the ``first`` nearest, then of the neighbours low over it."""
+    n, k = neighbors.shape
+    normal = np.empty((n, 3))
+    basis = np.empty((n, 3, 2))
+    frame = np.empty((3, 3))
+    c = np.empty((3, 3))
+    take = np.zeros(k, dtype=np.bool_)
+    for i in range(n):
+        for j in range(k):
+            take[j] = j < first
+        _weighted_frame(points, neighbors, i, take, c, frame)
+        for j in range(k):
+            m = neighbors[i, j]
+            height = (
+                (points[m, 0] - points[i, 0]) * frame[0, 0]
+                + (points[m, 1] - points[i, 1]) * frame[1, 0]
+                + (points[m, 2] - points[i, 2]) * frame[2, 0]
+            )
+            take[j] = abs(height) <= max_slope * reach[i, j]
+        _weighted_frame(points, neighbors, i, take, c, frame)
+        for r in range(3):
+            normal[i, r] = frame[r, 0]
+            basis[i, r, 0] = frame[r, 1]
+            basis[i, r, 1] = frame[r, 2]
+    return normal, basis
 
 
-def _relative(points, neighbors, block):
-    """Positions ``(b, k, 3)`` of the block's neighbours relative to each point."""
-    return points[neighbors[block]] - points[block][:, None, :]
+@numba.njit(cache=True)
+def _kept_on_sheet(points, neighbors, reach, normal, max_slope, min_cosine):
+    """``usable`` of :func:`surface_neighbours`: low over the point's plane, and a
+    tangent plane within ``min_cosine`` of the point's."""
+    n, k = neighbors.shape
+    usable = np.empty((n, k), dtype=np.bool_)
+    for i in range(n):
+        for j in range(k):
+            m = neighbors[i, j]
+            height = 0.0
+            cosine = 0.0
+            for r in range(3):
+                height += (points[m, r] - points[i, r]) * normal[i, r]
+                cosine += normal[m, r] * normal[i, r]
+            usable[i, j] = abs(height) <= max_slope * reach[i, j] and abs(cosine) >= min_cosine
+    return usable
 
 
 def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=None):
@@ -97,7 +199,9 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, k
     distance (:data:`MAX_SLOPE`) are left out, and the plane is fitted again to the rest
     (as many as the surface gives: as steady as a wide neighbourhood under noise). The
     neighbours kept are those low over that plane and whose own normal is within
-    :data:`MIN_NORMAL_COSINE` of the point's.
+    :data:`MIN_NORMAL_COSINE` of the point's. Each plane goes through the point: the
+    principal directions of its neighbours' positions relative to it (compiled, per
+    point).
 
     Returns ``(neighbors, usable, normal, basis)``: indices ``(n, k)``, the mask of the
     neighbours kept ``(n, k)``, unit normals ``(n, 3)`` and tangent bases
@@ -105,43 +209,90 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, k
     ``n_neighbors``, when the caller has it.
     """
     distances, neighbors = nearest(points, n_neighbors) if knn is None else knn
-    n, k = neighbors.shape
+    k = neighbors.shape[1]
     first = min(NORMAL_NEIGHBORS, k)
+    # A neighbour nearer than the first-th is measured against that one's distance.
     reach = np.maximum(distances, distances[:, first - 1 : first])
-    nearest_ones = np.zeros((1, k))
-    nearest_ones[:, :first] = 1.0
-    normal, basis = np.empty((n, 3)), np.empty((n, 3, 2))
-    for block in _blocks(n):
-        relative = _relative(points, neighbors, block)
-        flat = _flat(relative, _frames(relative, nearest_ones)[0], reach[block])
-        normal[block], basis[block] = _frames(relative, flat.astype(np.float64))
-    usable = np.empty((n, k), dtype=bool)
-    for block in _blocks(n):
-        agree = np.abs(_along(normal[neighbors[block]], normal[block])) >= MIN_NORMAL_COSINE
-        flat = _flat(_relative(points, neighbors, block), normal[block], reach[block])
-        usable[block] = flat & agree
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    neighbors = np.ascontiguousarray(neighbors, dtype=np.int64)
+    normal, basis = _sheet_frames(points, neighbors, reach, first, MAX_SLOPE)
+    usable = _kept_on_sheet(points, neighbors, reach, normal, MAX_SLOPE, MIN_NORMAL_COSINE)
     return neighbors, usable, normal, basis
 
 
-def _heights(coords, height, usable, unit):
-    """Heights of the neighbours over the point on the quadric fitted to the kept ones.
+@numba.njit(cache=True)
+def _lifted(points, neighbors, usable, normal, basis, first):
+    """Tangent coordinates ``(n, k, 2)`` of each point's neighbours and their heights
+    ``(n, k)`` on the quadric fitted to the kept ones.
 
     ``z = c0 + c1 x + c2 y + c3 x^2 + c4 x y + c5 y^2`` by least squares over the point
-    itself (at the origin) and its kept neighbours, in units of ``unit`` (n, 1); a point
-    with fewer than 8 samples keeps its tangent plane (heights zero). Returns the fitted
-    heights of the neighbours minus the point's, ``(n, k)``: the surface's bend without
-    the noise across it.
+    itself (at the origin) and its kept neighbours, in units of the ``first``-th
+    neighbour's distance, with a ridge of 1e-6; a point with fewer than 7 kept
+    neighbours keeps its tangent plane (heights zero). The heights returned are the
+    fitted ones minus the point's: the surface's bend without the noise across it.
     """
-    x, y = coords[..., 0] / unit, coords[..., 1] / unit
-    terms = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=-1)
-    weighted = (terms * usable[..., None]).transpose(0, 2, 1)
-    gram = np.matmul(weighted, terms)
-    gram[:, 0, 0] += 1.0  # the point itself, at height zero
-    gram += 1e-6 * np.eye(6)
-    moments = np.matmul(weighted, (height / unit)[..., None])
-    coefficients = np.linalg.solve(gram, moments)[..., 0]
-    coefficients[usable.sum(axis=1) < 7] = 0.0
-    return (_along(terms, coefficients) - coefficients[:, :1]) * unit
+    n, k = neighbors.shape
+    coords = np.empty((n, k, 2))
+    lift = np.zeros((n, k))
+    terms = np.empty((k, 6))
+    gram = np.empty((6, 6))
+    moments = np.empty(6)
+    for i in range(n):
+        m = neighbors[i, first - 1]
+        unit = 0.0
+        for r in range(3):
+            unit += (points[m, r] - points[i, r]) ** 2
+        unit = np.sqrt(unit)
+        kept = 0
+        for r in range(6):
+            moments[r] = 0.0
+            for q in range(6):
+                gram[r, q] = 1e-6 if r == q else 0.0
+        gram[0, 0] += 1.0  # the point itself, at height zero
+        for j in range(k):
+            m = neighbors[i, j]
+            ux = points[m, 0] - points[i, 0]
+            uy = points[m, 1] - points[i, 1]
+            uz = points[m, 2] - points[i, 2]
+            x = ux * basis[i, 0, 0] + uy * basis[i, 1, 0] + uz * basis[i, 2, 0]
+            y = ux * basis[i, 0, 1] + uy * basis[i, 1, 1] + uz * basis[i, 2, 1]
+            z = ux * normal[i, 0] + uy * normal[i, 1] + uz * normal[i, 2]
+            coords[i, j, 0] = x
+            coords[i, j, 1] = y
+            x, y, z = x / unit, y / unit, z / unit
+            terms[j, 0], terms[j, 1], terms[j, 2] = 1.0, x, y
+            terms[j, 3], terms[j, 4], terms[j, 5] = x * x, x * y, y * y
+            if usable[i, j]:
+                kept += 1
+                for r in range(6):
+                    moments[r] += terms[j, r] * z
+                    for q in range(6):
+                        gram[r, q] += terms[j, r] * terms[j, q]
+        if kept < 7:
+            continue
+        # Cholesky of the (ridged, positive definite) Gram matrix, then two solves.
+        for r in range(6):
+            for q in range(r + 1):
+                total = gram[r, q]
+                for m in range(q):
+                    total -= gram[r, m] * gram[q, m]
+                gram[r, q] = np.sqrt(total) if r == q else total / gram[q, q]
+        for r in range(6):
+            total = moments[r]
+            for m in range(r):
+                total -= gram[r, m] * moments[m]
+            moments[r] = total / gram[r, r]
+        for r in range(5, -1, -1):
+            total = moments[r]
+            for m in range(r + 1, 6):
+                total -= gram[m, r] * moments[m]
+            moments[r] = total / gram[r, r]
+        for j in range(k):
+            height = 0.0
+            for r in range(1, 6):
+                height += terms[j, r] * moments[r]
+            lift[i, j] = height * unit
+    return coords, lift
 
 
 def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=None):
@@ -159,14 +310,9 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=Non
     dropped. ``points`` must be distinct; ``knn`` as for :func:`surface_neighbours`.
     """
     neighbors, usable, normal, basis = surface_neighbours(points, n_neighbors, knn)
-    n, k = neighbors.shape
-    coords, lift = np.empty((n, k, 2)), np.empty((n, k))
-    for block in _blocks(n):
-        relative = _relative(points, neighbors, block)
-        coords[block] = np.matmul(relative, basis[block])
-        unit = np.linalg.norm(relative[:, min(NORMAL_NEIGHBORS, k) - 1], axis=1)[:, None]
-        height = _along(relative, normal[block])
-        lift[block] = _heights(coords[block], height, usable[block], unit)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    first = min(NORMAL_NEIGHBORS, neighbors.shape[1])
+    coords, lift = _lifted(points, neighbors, usable, normal, basis, first)
     fans = local_delaunay_fans(coords, usable)
     i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
     a = np.column_stack([coords[i, ja], lift[i, ja]])

@@ -14,7 +14,7 @@ from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, weld_vertices
-from ._triangulation import LOCAL_NEIGHBORS, nearest
+from ._triangulation import LOCAL_NEIGHBORS, nearest, nearest_within
 from .graph import canonical_order, neighbourhood_components, sparse_outliers
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
@@ -46,7 +46,8 @@ def _far_components(points, laplacian, components, place):
     component of largest area is kept, its operator built without the others; then the
     outliers of that component (:func:`.graph.sparse_outliers`), each a component of its
     own. Returns ``(kept, L, M, triangles, n_other, share)``."""
-    # One neighbour search serves every step while no point is dropped.
+    # One neighbour search serves every step: where points are dropped, only the points
+    # that lose a neighbour are searched again.
     knn = nearest(points, LOCAL_NEIGHBORS)
     n_components, labels = neighbourhood_components(points, knn)
     build = CLOUD_LAPLACIANS[laplacian].value
@@ -62,7 +63,8 @@ def _far_components(points, laplacian, components, place):
         for label in range(n_components):
             members = labels == label
             if np.count_nonzero(members) >= MIN_POINTS:
-                operators[label] = build(points[members])
+                within = nearest_within(points, knn, members, LOCAL_NEIGHBORS)
+                operators[label] = build(points[members], knn=within)
                 area[label] = operators[label][1].diagonal().sum()
         if not operators:
             raise ValueError(
@@ -71,8 +73,9 @@ def _far_components(points, laplacian, components, place):
             )
         kept, n_other, share = _largest(labels, area)
         operator = operators[int(labels[np.argmax(kept)])]
-    whole = n_components == 1
-    outliers = np.flatnonzero(kept)[sparse_outliers(points[kept], knn if whole else None)]
+    knn = knn if kept.all() else nearest_within(points, knn, kept, LOCAL_NEIGHBORS)
+    alone = sparse_outliers(points[kept], knn)  # a mask over the kept points
+    outliers = np.flatnonzero(kept)[alone]
     if len(outliers):
         if components == "error":
             raise ValueError(
@@ -80,10 +83,11 @@ def _far_components(points, laplacian, components, place):
                 "surface for the sampling around them); pass components='largest' to drop "
                 "them"
             )
+        knn = nearest_within(points[kept], knn, ~alone, LOCAL_NEIGHBORS)
         kept[outliers] = False
         operator, n_other = None, n_other + len(outliers)
     if operator is None:
-        operator = build(points[kept], knn=knn if kept.all() else None)
+        operator = build(points[kept], knn=knn)
     return kept, *operator, n_other, share
 
 
@@ -96,7 +100,10 @@ def _edges(triangles: np.ndarray, renumber: np.ndarray) -> np.ndarray:
     b = corners[:, [1, 2, 0]].ravel()
     low, high = np.minimum(a, b), np.maximum(a, b)
     n = max(int(renumber.max()) + 1, 1)
-    codes = np.unique(low * n + high)  # one integer per edge: a fast unique
+    # One integer per edge, sorted, each once: a sort and a mask (numpy 2's hashing
+    # np.unique took 30 times as long on the ~20 codes per point of a cloud).
+    codes = np.sort(low * n + high)
+    codes = codes[np.concatenate([[True], codes[1:] != codes[:-1]])] if len(codes) else codes
     return np.column_stack([codes // n, codes % n])
 
 
