@@ -392,3 +392,32 @@ def test_public_laplacians_refuse_bad_faces_instead_of_reading_out_of_bounds():
         cotangent_laplacian(vertices, [[0, 1, 2], [0, 1, 1]])
     with pytest.raises(ValueError, match="vertex 0 has a non-finite coordinate"):
         cotangent_laplacian(np.full((3, 3), np.nan), [[0, 1, 2]])
+
+
+@pytest.mark.parametrize("scale", [1e-150, 1e-100, 1e100, 1e150])
+def test_the_operators_hold_at_any_scale_float64_can_hold(scale):
+    from sklearn_meshph import point_cloud_laplacian
+
+    sphere = trimesh.creation.icosphere(2)
+    L0, M0 = cotangent_laplacian(sphere.vertices, sphere.faces)
+    L, M = cotangent_laplacian(np.asarray(sphere.vertices) * scale, sphere.faces)
+    np.testing.assert_allclose(L.toarray(), L0.toarray(), atol=1e-12)
+    np.testing.assert_allclose(M.diagonal() / scale**2, M0.diagonal(), rtol=1e-12)
+    # A sampled cloud (no exactly cocircular neighbours) likewise.
+    points = trimesh.sample.sample_surface(sphere, 800, seed=0)[0]
+    C0, N0 = point_cloud_laplacian(points)
+    C, N = point_cloud_laplacian(points * scale)
+    np.testing.assert_allclose(C.toarray(), C0.toarray(), atol=1e-9)
+    np.testing.assert_allclose(N.diagonal() / scale**2, N0.diagonal(), rtol=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-160, 1e160, 1e300])
+def test_areas_beyond_float64_are_refused_not_zero_or_inf(scale):
+    from sklearn_meshph import point_cloud_laplacian
+
+    sphere = trimesh.creation.icosphere(2)
+    with pytest.raises(ValueError, match="cotangent_laplacian: the areas do not fit"):
+        cotangent_laplacian(np.asarray(sphere.vertices) * scale, sphere.faces)
+    points = trimesh.sample.sample_surface(sphere, 800, seed=0)[0]
+    with pytest.raises(ValueError, match="point_cloud_laplacian: the areas do not fit"):
+        point_cloud_laplacian(points * scale)

@@ -11,7 +11,7 @@
 - :mod:`.graph`: compiled union-find, connected components and the edge adjacency.
 """
 
-from ._geometry import DEGENERATE_SINE, smallest_angle_sines, triangle, unit_box
+from ._geometry import DEGENERATE_SINE, smallest_angle_sines, triangle, unit_box, unit_box_mass
 from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
@@ -28,5 +28,6 @@ __all__ = [
     "smallest_angle_sines",
     "triangle",
     "unit_box",
+    "unit_box_mass",
     "weld_vertices",
 ]

@@ -13,6 +13,7 @@ __all__ = [
     "smallest_angle_sines",
     "triangle",
     "unit_box",
+    "unit_box_mass",
 ]
 
 
@@ -28,6 +29,25 @@ def unit_box(vertices: np.ndarray) -> tuple[np.ndarray, float]:
     if not 0.0 < extent < np.inf:
         return vertices, 1.0
     return half / extent, 2.0 * extent
+
+
+def unit_box_mass(mass: np.ndarray, scale: float, place: str) -> np.ndarray:
+    """Lumped masses computed in :func:`unit_box` brought back to the input's units
+    (times ``scale`` squared), or a ``ValueError`` naming ``place`` when float64 cannot
+    hold them there (areas above about 1e308 or below 2.2e-308: coordinates beyond
+    about 1e154 or under 1e-154). The stiffness of a cotangent Laplacian needs no such step:
+    its weights are ratios of lengths."""
+    with np.errstate(over="ignore", under="ignore"):
+        scaled = (mass * scale) * scale
+    # Subnormal areas (below float64's smallest normal number) keep too few digits.
+    lost = (scaled < np.finfo(np.float64).tiny) & (mass > 0)
+    if not np.isfinite(scaled).all() or lost.any():
+        raise ValueError(
+            f"{place}: the areas do not fit in float64 at this scale (a bounding box of "
+            f"{scale:.3g}): rescale the input, or use LaplacianEigenTransformer or "
+            "laplacian_eigenfunctions, which solve in a unit box and scale back"
+        )
+    return scaled
 
 
 # A face is degenerate when twice its area is below this fraction of its longest edge

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
+from ..mesh import unit_box, unit_box_mass
 from ..mesh.graph_laplacians import from_combinatorial, normalized_laplacian, random_walk_laplacian
 from ..mesh.validation import check_vertices
 from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
@@ -100,8 +101,11 @@ def point_cloud_laplacian(
         raise ValueError(
             f"points: a point cloud needs at least {MIN_POINTS} points, got {len(points)}"
         )
-    L, M, _ = cloud_operator(points, n_neighbors)
-    return L, M
+    # In the unit box, as the eigen stage builds it: the same operator at any scale
+    # (the stiffness is scale-free, the mass scaled back).
+    unit, scale = unit_box(points)
+    L, M, _ = cloud_operator(unit, n_neighbors)
+    return L, sp.diags(unit_box_mass(M.diagonal(), scale, "point_cloud_laplacian"))
 
 
 def cloud_operator(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, *, knn=None):

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
 from ..graph.validation import Graph
+from ..mesh import unit_box, unit_box_mass
 from ..mesh.graph import edge_matrix_csr, mesh_edges
 from ..mesh.graph_laplacians import (
     OPERATORS,
@@ -85,8 +86,18 @@ def cotangent_laplacian(
     (True, 12.33)
     """
     vertices = check_vertices(vertices)
+    faces = check_faces(faces, len(vertices))
+    # In the unit box: the weights are ratios of lengths, the same at any scale, and
+    # the areas neither underflow nor overflow (at 1e-150 or 1e150 they did).
+    unit, scale = unit_box(vertices)
+    L, M = _cotangent(unit, faces)
+    return L, sp.diags(unit_box_mass(M.diagonal(), scale, "cotangent_laplacian"))
+
+
+def _cotangent(vertices, faces):
+    """:func:`cotangent_laplacian` of checked vertices as they are (the eigen stage's,
+    already in the unit box)."""
     n = len(vertices)
-    faces = check_faces(faces, n)
     weights, double_area = cotangent_weights(vertices, faces)
     if not (double_area > 0).all():  # also catches NaN coordinates
         bad = int(np.flatnonzero(~(double_area > 0))[0])
@@ -147,7 +158,7 @@ LAPLACIANS = Registry(
     [
         Option(
             "cotangent",
-            cotangent_laplacian,
+            _cotangent,
             "finite-element Laplace-Beltrami operator: cotangent stiffness `L`, barycentric "
             "lumped mass `M`, `L phi = lambda M phi`; depends on the surface, not on its "
             "triangulation (the default)",
