@@ -505,3 +505,16 @@ def test_sample_point_cloud_is_uniform_deterministic_and_noisy():
     noisy = sample_point_cloud(sphere, 2000, noise=0.01, random_state=0)
     diagonal = np.linalg.norm(np.ptp(sphere.vertices, axis=0))
     assert np.std(noisy - points) / (0.01 * diagonal) == pytest.approx(1.0, abs=0.05)
+
+
+@pytest.mark.parametrize("m", [0, 1, 50, 5000])
+def test_unique_edges_is_numpys_unique_of_the_sorted_pairs(m):
+    from sklearn_meshph.pointcloud.graph import unique_edges
+
+    rng = np.random.default_rng(m)
+    a, b = rng.integers(0, 40, m), rng.integers(0, 40, m)  # loops and repeats
+    pairs = np.column_stack([np.minimum(a, b), np.maximum(a, b)])
+    expected = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0).reshape(-1, 2)
+    found = unique_edges(a, b, 40)
+    assert found.dtype == np.int64 and found.shape == expected.shape
+    np.testing.assert_array_equal(found, expected)
