@@ -62,6 +62,14 @@ def point_cloud_laplacian(
         triangle (its neighbours on its own sheet too few or on a line) has zero mass
         and no stiffness.
 
+    Raises
+    ------
+    ValueError
+        Fewer than ``MIN_POINTS`` points, or areas float64 cannot hold at the points'
+        scale (coordinates beyond about 1e154 or below 1e-154): the operator is built
+        in the unit box and its mass scaled back, so any other scale gives the same
+        stiffness and the mass times the scale squared.
+
     Notes
     -----
     Every point's neighbours on its own sheet of the surface

@@ -69,6 +69,13 @@ def cotangent_laplacian(
     M : scipy.sparse.dia_matrix of shape (n, n)
         Diagonal lumped mass: a third of the area of the triangles around each vertex.
 
+    Raises
+    ------
+    ValueError
+        A face of zero area (or a non-finite vertex), or areas float64 cannot hold at
+        the mesh's scale (coordinates beyond about 1e154 or below 1e-154): the operator
+        is built in the unit box and its mass scaled back.
+
     Notes
     -----
     Barycentric and Voronoi lumping differ per vertex on irregular meshes but barely
