@@ -167,3 +167,16 @@ def test_nearest_within_a_subset_is_a_search_of_the_subset(dropped):
     found = nearest_within(points, nearest(points, 30), keep, 30)
     for a, b in zip(found, expected, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("n_neighbors", [30, 60, 500])
+def test_wide_neighbourhoods_fit_their_planes_and_quadrics_locally(n_neighbors):
+    import trimesh
+
+    # Up to a hemisphere of neighbours is "low" over a point's plane; a quadric fitted
+    # to all of them missed the sphere near the point (the area was 1.9 times 4 pi).
+    points = trimesh.sample.sample_surface(trimesh.creation.icosphere(3), 1000, seed=1)[0]
+    L, M = point_cloud_laplacian(points, n_neighbors=n_neighbors)
+    assert abs(M.sum() / (4 * np.pi) - 1) < 0.01
+    values = scipy.linalg.eigh(L.toarray(), M.toarray(), eigvals_only=True)[1:4]
+    np.testing.assert_allclose(values, 2.0, rtol=0.02)  # l(l + 1) for l = 1

@@ -143,9 +143,10 @@ def _weighted_frame(points, neighbors, i, take, c, frame):
 
 
 @numba.njit(cache=True)
-def _sheet_frames(points, neighbors, reach, first, max_slope):
+def _sheet_frames(points, neighbors, reach, first, fitted, max_slope):
     """Normals ``(n, 3)`` and tangent bases ``(n, 3, 2)`` of :func:`surface_neighbours`:
-    the principal plane of the ``first`` nearest, then of the neighbours low over it."""
+    the principal plane of the ``first`` nearest, then of those of the ``fitted``
+    nearest that are low over it."""
     n, k = neighbors.shape
     normal = np.empty((n, 3))
     basis = np.empty((n, 3, 2))
@@ -163,7 +164,7 @@ def _sheet_frames(points, neighbors, reach, first, max_slope):
                 + (points[m, 1] - points[i, 1]) * frame[1, 0]
                 + (points[m, 2] - points[i, 2]) * frame[2, 0]
             )
-            take[j] = abs(height) <= max_slope * reach[i, j]
+            take[j] = j < fitted and abs(height) <= max_slope * reach[i, j]
         _weighted_frame(points, neighbors, i, take, c, frame)
         for r in range(3):
             normal[i, r] = frame[r, 0]
@@ -215,18 +216,21 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, k
     reach = np.maximum(distances, distances[:, first - 1 : first])
     points = np.ascontiguousarray(points, dtype=np.float64)
     neighbors = np.ascontiguousarray(neighbors, dtype=np.int64)
-    normal, basis = _sheet_frames(points, neighbors, reach, first, MAX_SLOPE)
+    fitted = min(LOCAL_NEIGHBORS, k)
+    normal, basis = _sheet_frames(points, neighbors, reach, first, fitted, MAX_SLOPE)
     usable = _kept_on_sheet(points, neighbors, reach, normal, MAX_SLOPE, MIN_NORMAL_COSINE)
     return neighbors, usable, normal, basis
 
 
 @numba.njit(cache=True)
-def _lifted(points, neighbors, usable, normal, basis, first):
+def _lifted(points, neighbors, usable, normal, basis, first, fitted):
     """Tangent coordinates ``(n, k, 2)`` of each point's neighbours and their heights
     ``(n, k)`` on the quadric fitted to the kept ones.
 
     ``z = c0 + c1 x + c2 y + c3 x^2 + c4 x y + c5 y^2`` by least squares over the point
-    itself (at the origin) and its kept neighbours, in units of the ``first``-th
+    itself (at the origin) and its kept neighbours among the ``fitted`` nearest (a
+    quadric is local: over a wider neighbourhood it misses the surface near the point
+    and inflates the areas there), in units of the ``first``-th
     neighbour's distance, with a ridge of 1e-6; a point with fewer than 7 kept
     neighbours keeps its tangent plane (heights zero). The heights returned are the
     fitted ones minus the point's: the surface's bend without the noise across it.
@@ -262,7 +266,7 @@ def _lifted(points, neighbors, usable, normal, basis, first):
             x, y, z = x / unit, y / unit, z / unit
             terms[j, 0], terms[j, 1], terms[j, 2] = 1.0, x, y
             terms[j, 3], terms[j, 4], terms[j, 5] = x * x, x * y, y * y
-            if usable[i, j]:
+            if usable[i, j] and j < fitted:
                 kept += 1
                 for r in range(6):
                     moments[r] += terms[j, r] * z
@@ -312,7 +316,8 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=Non
     neighbors, usable, normal, basis = surface_neighbours(points, n_neighbors, knn)
     points = np.ascontiguousarray(points, dtype=np.float64)
     first = min(NORMAL_NEIGHBORS, neighbors.shape[1])
-    coords, lift = _lifted(points, neighbors, usable, normal, basis, first)
+    fitted = min(LOCAL_NEIGHBORS, neighbors.shape[1])
+    coords, lift = _lifted(points, neighbors, usable, normal, basis, first, fitted)
     fans = local_delaunay_fans(coords, usable)
     i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
     a = np.column_stack([coords[i, ja], lift[i, ja]])

@@ -51,7 +51,10 @@ def point_cloud_laplacian(
     points : ndarray of shape (n, 3)
         Distinct, finite points sampling a surface.
     n_neighbors : int, default=30
-        Neighbours per point that its tangent plane and local triangulation come from.
+        Neighbours per point that its local triangulation comes from. Its tangent plane
+        and quadric are fitted to at most the 30 nearest of them (a wider fit misses
+        the surface near the point), so more neighbours change little; fewer than
+        about 20 leave gaps between the fans (less area, weaker coupling).
 
     Returns
     -------
