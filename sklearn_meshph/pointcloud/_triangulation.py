@@ -198,7 +198,8 @@ def surface_neighbours(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, k
     finger) or to a part nearby (a leg against the body). A first tangent plane comes
     from the ``NORMAL_NEIGHBORS`` nearest; neighbours too high above it for their
     distance (:data:`MAX_SLOPE`) are left out, and the plane is fitted again to the rest
-    (as many as the surface gives: as steady as a wide neighbourhood under noise). The
+    of the ``LOCAL_NEIGHBORS`` nearest (as many as the surface gives: as steady as a
+    wide neighbourhood under noise, and no wider: a plane, like a quadric, is local). The
     neighbours kept are those low over that plane and whose own normal is within
     :data:`MIN_NORMAL_COSINE` of the point's. Each plane goes through the point: the
     principal directions of its neighbours' positions relative to it (compiled, per
