@@ -53,8 +53,12 @@ def point_cloud_laplacian(
     n_neighbors : int, default=30
         Neighbours per point that its local triangulation comes from. Its tangent plane
         and quadric are fitted to at most the 30 nearest of them (a wider fit misses
-        the surface near the point), so more neighbours change little; fewer than
-        about 20 leave gaps between the fans (less area, weaker coupling).
+        the surface near the point). More neighbours still change the fans: a point
+        whose near neighbours are left out (another sheet, a disagreeing plane) gets
+        its cell closed by farther ones, so the area grows with the count. On a Sumner
+        cat at 3,000 points the mass is 0.73, 0.78, 1.02 and 1.85 times the mesh's area
+        with 20, 30, 100 and 500 neighbours; on a sphere 60 to 999 give the default's
+        operator. Keep it near the default.
 
     Returns
     -------
