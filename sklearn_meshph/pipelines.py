@@ -500,7 +500,8 @@ def make_graph_classifier(
     classifier : {"trees", "kernels"}, default="trees"
         ``"kernels"``: the steps after ``"eigen"`` are ``"distances"``
         (:class:`GraphPairDistances`: sliced Wasserstein distances of the diagrams, the
-        Weisfeiler-Lehman patterns' distance, the features' Canberra distance) and
+        Weisfeiler-Lehman patterns' distance, the distance of the features
+        log-scaled and standardized on the training graphs) and
         ``"classifier"`` (:class:`KernelSumSVC`: the diagrams' kernels averaged into
         one, the sum of kernels and ``C`` chosen by internal cross-validation on the
         training graphs); ``n_estimators`` and ``min_samples_leaf`` are then unused.

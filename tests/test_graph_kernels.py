@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import data_folder
 from sklearn.base import clone
-from sklearn.model_selection import KFold, cross_val_score, cross_validate
+from sklearn.model_selection import KFold, cross_val_score
 from test_graph_learning import cycle, eigen, star
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
@@ -29,15 +29,60 @@ def graphs():
     return samples, np.repeat([0, 1, 2], len(sizes))
 
 
-def test_pair_distances_depend_on_the_pair_alone(graphs):
+@pytest.mark.parametrize("features", ["standardized", "canberra"])
+def test_pair_distances_of_a_fold_from_the_stack_of_all(graphs, features):
     X = fields(graphs[0])
-    stack = GraphPairDistances().fit_transform(X)
+    full = GraphPairDistances(features=features)
+    stack = full.fit_transform(X)
     assert stack.shape == (len(X), len(X), 4 * 2 + 2)  # 4 kinds x 2 times, patterns, features
     np.testing.assert_allclose(stack, stack.transpose(1, 0, 2), atol=1e-12)
     np.testing.assert_allclose(stack[np.arange(len(X)), np.arange(len(X))], 0.0, atol=1e-12)
-    part = GraphPairDistances().fit(X[:10])
-    np.testing.assert_allclose(part.transform(X[10:]), stack[10:, :10], atol=1e-12)
+    train = np.random.default_rng(0).permutation(len(X))[:10]
+    test = np.setdiff1d(np.arange(len(X)), train)
+    part = GraphPairDistances(features=features)
+    fitted_stack = part.fit_transform([X[i] for i in train])
     assert part.n_positions_ == 10 and part.n_features_in_ == 10
+    np.testing.assert_allclose(full.fold_stack(stack, train, train), fitted_stack, atol=1e-10)
+    tested = part.transform([X[i] for i in test])
+    np.testing.assert_allclose(full.fold_stack(stack, test, train), tested, atol=1e-10)
+    # The diagrams and patterns depend on the pair alone; the Canberra distance too,
+    # the standardized features on the fitted graphs' statistics.
+    np.testing.assert_allclose(tested[:, :, :-1], stack[np.ix_(test, train)][:, :, :-1])
+    same = np.allclose(tested[:, :, -1], stack[np.ix_(test, train)][:, :, -1])
+    assert same == (features == "canberra")
+
+
+def test_standardized_feature_distance_against_scikit_learn_scaler():
+    from sklearn.preprocessing import StandardScaler
+
+    rng = np.random.default_rng(1)
+    fitted = rng.lognormal(3.0, 2.0, (30, 6)) * rng.choice([-1, 1], (30, 6))
+    fitted[:, 2] = 7.0  # constant on the fitted samples: left out
+    queries = rng.lognormal(3.0, 2.0, (5, 6))
+    distances = GraphPairDistances()
+    distances._standardize(fitted)
+    got = distances._feature_distances(queries, fitted)
+    logs = np.sign(fitted) * np.log1p(np.abs(fitted))
+    scaler = StandardScaler().fit(np.delete(logs, 2, axis=1))
+    left = scaler.transform(np.delete(np.log1p(queries), 2, axis=1))
+    right = scaler.transform(np.delete(logs, 2, axis=1))
+    expected = ((left[:, None, :] - right[None, :, :]) ** 2).sum(axis=2)
+    np.testing.assert_allclose(got, expected, rtol=1e-10)
+    assert np.isinf(distances.features_scale_[2]) and np.isfinite(got).all()
+    queries[3, 4] = np.nan
+    with pytest.raises(ValueError, match="graph 3: feature 4 is nan"):
+        distances._feature_distances(queries, fitted)
+    with pytest.raises(ValueError, match="graph 3: feature 4 is nan"):
+        GraphPairDistances()._standardize(queries)
+
+
+def test_fold_stack_refuses_a_stack_of_other_samples(graphs):
+    X = fields(graphs[0])
+    distances = GraphPairDistances().fit(X)
+    with pytest.raises(ValueError, match="stack has shape"):
+        distances.fold_stack(np.zeros((3, 3, 10)), [0], [1, 2])
+    with pytest.raises(ValueError, match="features"):
+        GraphPairDistances(features="euclidean").fit(X)
 
 
 def test_pattern_distance_of_relabelled_and_different_graphs():
@@ -145,10 +190,18 @@ def test_kernel_classifier_of_graphs(graphs):
     cv = KFold(4, shuffle=True, random_state=0)
     scores = cross_val_score(model, X, y, cv=cv)
     assert scores.mean() > 0.9
-    # The distances learn nothing from the training graphs: the stack of all the
-    # graphs, sliced by the folds, gives the same predictions as the pipeline per fold.
+    # The stack of all the graphs, each fold's taken by fold_stack (a slice, the
+    # features standardized on the fold's training graphs), gives the same predictions
+    # as the pipeline per fold (what benchmarks/graph_classification.py does).
     stack = model[:-1].fit_transform(X)
-    sliced = cross_validate(clone(model[-1]), stack, y, cv=cv)["test_score"]
+    distances = model.named_steps["distances"]
+    X_, y_ = np.arange(len(y)), np.asarray(y)
+    sliced = [
+        clone(model[-1])
+        .fit(distances.fold_stack(stack, train, train), y_[train])
+        .score(distances.fold_stack(stack, test, train), y_[test])
+        for train, test in cv.split(X_)
+    ]
     np.testing.assert_array_equal(sliced, scores)
     fitted = pickle.loads(pickle.dumps(clone(model).fit(X, y)))
     assert fitted.predict([cycle(14), path(14), star(14)]).tolist() == [0, 1, 2]
@@ -163,5 +216,11 @@ def test_mutag_kernel_accuracy_floor():
     graphs, y = load_tu_dataset(data_folder("tu/MUTAG", "TU MUTAG"))
     model = make_graph_classifier(classifier="kernels")
     stack = model[:-1].fit_transform(graphs)
-    scores = cross_val_score(model[-1], stack, y, cv=KFold(5, shuffle=True, random_state=0))
-    assert scores.mean() > 0.8
+    distances, y = model.named_steps["distances"], np.asarray(y)
+    scores = [
+        clone(model[-1])
+        .fit(distances.fold_stack(stack, train, train), y[train])
+        .score(distances.fold_stack(stack, test, train), y[test])
+        for train, test in KFold(5, shuffle=True, random_state=0).split(stack)
+    ]
+    assert np.mean(scores) > 0.8

@@ -1,6 +1,6 @@
 """GraphPairDistances: the distances between graphs that a sum of kernels is made of
 (the sliced Wasserstein distance of each extended diagram, the Weisfeiler-Lehman
-patterns' distance, the Canberra distance of the features), stacked per pair."""
+patterns' distance, the distance between the features), stacked per pair."""
 
 from __future__ import annotations
 
@@ -9,10 +9,11 @@ from numbers import Integral
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
+from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer
-from .._param_validation import Interval
+from .._param_validation import Interval, Options
 from ..diagrams.per_diagram import PerDiagramDistance
 from ..persistence import LowerStarPersistence
 from .graph_features import GraphFeatures, wl_labels
@@ -29,6 +30,22 @@ def _pattern_counts(field, iterations: int):
     ]
     with np.errstate(over="ignore"):
         return np.unique(np.concatenate(labels), return_counts=True)
+
+
+def _log_scaled(features: np.ndarray) -> np.ndarray:
+    """``sign(x) log(1 + |x|)``: counts, totals and ranges of many orders of magnitude
+    brought to comparable spreads, zero and the signs kept."""
+    return np.sign(features) * np.log1p(np.abs(features))
+
+
+def _check_finite(features: np.ndarray) -> np.ndarray:
+    """``features``, refused naming the graph if one is not finite (a NaN would make
+    every distance of its graph NaN, or every graph's through the statistics)."""
+    bad = ~np.isfinite(features)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"graph {i}: feature {j} is {features[i, j]}, not finite")
+    return features
 
 
 def _pattern_distances(left, right) -> np.ndarray:
@@ -62,12 +79,20 @@ class GraphPairDistances(SampleTransformer):
     - the Weisfeiler-Lehman subtree patterns of the degrees (Shervashidze et al., JMLR
       2011): ``2 - 2 k`` with ``k`` the normalized count kernel (exact patterns,
       ``wl_iterations`` iterations after the degrees);
-    - the Canberra distance between the features (:class:`DiagramStatistics` of the
-      diagrams and :class:`GraphFeatures`), which no feature's scale dominates.
+    - the distance between the features (:class:`DiagramStatistics` of the diagrams
+      and :class:`GraphFeatures`): with ``features="standardized"``, the squared
+      Euclidean distance of the features log-scaled (``sign(x) log(1 + |x|)``) and
+      standardized by the fitted graphs' means and standard deviations (features
+      constant on the fitted graphs left out), whose ``exp(-d / (2 sigma^2))`` is a
+      Gaussian kernel; with ``features="canberra"``, their Canberra distance, which no
+      feature's scale dominates and which learns nothing from the fitted graphs.
 
-    A pair's distances depend on that pair alone: nothing is learned from the fitted
-    graphs but the graphs themselves, so the stack of all the samples, sliced, gives
-    every fold's (a cross-validation of a pairwise estimator does that slicing).
+    The diagrams' and patterns' distances of a pair depend on that pair alone; the
+    standardized features' depend on the fitted graphs' statistics too. So the stack
+    of all the samples gives every fold's by :meth:`fold_stack` (a slice, the features'
+    position computed again with the fold's statistics), without recomputing the
+    diagrams' distances; with ``features="canberra"`` the slice alone does (a
+    cross-validation of a pairwise estimator does that slicing).
 
     Parameters
     ----------
@@ -75,6 +100,10 @@ class GraphPairDistances(SampleTransformer):
         Lines of the sliced Wasserstein distance.
     wl_iterations : int, default=3
         Weisfeiler-Lehman iterations after the degrees.
+    features : {"standardized", "canberra"}, default="standardized"
+        The features' distance (above). Under PersLay's protocol the standardized
+        features' kernel gave PROTEINS 75.7 against 74.6 with the Canberra distance,
+        the other datasets within 0.2 (``docs/graphs.md``).
     n_jobs : int, default=None
         Parallel jobs of the persistence and the distances (joblib).
 
@@ -84,6 +113,12 @@ class GraphPairDistances(SampleTransformer):
         The last axis of the output: the diagrams, then the patterns and the features.
     n_features_in_ : int
         Number of fitted graphs.
+    features_ : ndarray of shape (n_fitted, n_features)
+        The fitted graphs' features.
+    features_mean_, features_scale_ : ndarray of shape (n_features,)
+        With ``features="standardized"``: the mean and standard deviation of the
+        log-scaled features over the fitted graphs (``inf`` where a feature is constant
+        on them: it is left out).
 
     See Also
     --------
@@ -96,12 +131,14 @@ class GraphPairDistances(SampleTransformer):
     _parameter_constraints = {
         "n_directions": [Interval(Integral, 1, None, closed="left")],
         "wl_iterations": [Interval(Integral, 0, 100, closed="both")],
+        "features": [Options(("standardized", "canberra"))],
         "n_jobs": [Integral, None],
     }
 
-    def __init__(self, n_directions=10, wl_iterations=3, n_jobs=None):
+    def __init__(self, n_directions=10, wl_iterations=3, features="standardized", n_jobs=None):
         self.n_directions = n_directions
         self.wl_iterations = wl_iterations
+        self.features = features
         self.n_jobs = n_jobs
 
     def _describe(self, X, fitting: bool):
@@ -117,10 +154,68 @@ class GraphPairDistances(SampleTransformer):
         patterns = [_pattern_counts(field, self.wl_iterations) for field in X]
         return diagrams, features, patterns
 
+    def _standardize(self, fitted: np.ndarray) -> None:
+        """Learn the log-scaled features' means and scales on the ``fitted`` rows."""
+        logs = _log_scaled(_check_finite(fitted))
+        self.features_mean_ = logs.mean(axis=0)
+        scale = logs.std(axis=0)
+        # A feature constant on the fitted graphs separates none of them: left out.
+        self.features_scale_ = np.where(
+            scale > 1e-12 * (1 + np.abs(self.features_mean_)), scale, np.inf
+        )
+
+    def _feature_distances(self, features: np.ndarray, fitted: np.ndarray) -> np.ndarray:
+        if self.features == "canberra":
+            return np.nan_to_num(cdist(features, fitted, "canberra"))
+        _check_finite(features)
+        left, right = (
+            (_log_scaled(part) - self.features_mean_) / self.features_scale_
+            for part in (features, fitted)
+        )
+        return cdist(left, right, "sqeuclidean")
+
     def _stack(self, sliced, features, patterns):
-        canberra = np.nan_to_num(cdist(features, self.features_, "canberra"))
-        parts = [sliced, _pattern_distances(patterns, self.patterns_), canberra]
+        parts = [
+            sliced,
+            _pattern_distances(patterns, self.patterns_),
+            self._feature_distances(features, self.features_),
+        ]
         return np.dstack(parts)
+
+    def fold_stack(self, stack, rows, train) -> np.ndarray:
+        """The distances of samples ``rows`` to samples ``train`` that this transformer
+        fitted on the samples ``train`` alone would give, from ``stack``, its
+        ``fit_transform`` of all its samples (in the same order).
+
+        The diagrams' and patterns' positions are the slice ``stack[rows][:, train]``;
+        the features' (standardized by the ``train`` samples' statistics) is computed
+        again from ``features_``. This is how a cross-validation of the kernel SVM
+        computes the expensive distances once, not once per fold.
+
+        Parameters
+        ----------
+        stack : ndarray of shape (n_fitted, n_fitted, n_positions_)
+        rows, train : array-like of int
+            Indices of fitted samples.
+
+        Returns
+        -------
+        ndarray of shape (len(rows), len(train), n_positions_)
+        """
+        check_is_fitted(self, "n_positions_")
+        stack = np.asarray(stack)
+        if stack.shape != (self.n_features_in_, self.n_features_in_, self.n_positions_):
+            raise ValueError(
+                f"stack has shape {stack.shape}, expected the fitted samples' "
+                f"{(self.n_features_in_, self.n_features_in_, self.n_positions_)}"
+            )
+        rows, train = np.asarray(rows, dtype=np.intp), np.asarray(train, dtype=np.intp)
+        out = np.array(stack[np.ix_(rows, train)], dtype=np.float64)
+        if self.features == "standardized":
+            fold = clone(self)
+            fold._standardize(self.features_[train])
+            out[:, :, -1] = fold._feature_distances(self.features_[rows], self.features_[train])
+        return out
 
     def fit(self, X, y=None):
         """Store the diagrams, features and patterns of the graph fields ``X`` (from
@@ -133,6 +228,8 @@ class GraphPairDistances(SampleTransformer):
         self._check_params()
         X = GraphFeatures()._fields(X)
         diagrams, self.features_, self.patterns_ = self._describe(X, fitting=True)
+        if self.features == "standardized":
+            self._standardize(self.features_)
         self.sliced_ = PerDiagramDistance(n_directions=self.n_directions, n_jobs=self.n_jobs)
         self.n_features_in_ = len(X)
         return diagrams
