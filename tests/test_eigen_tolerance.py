@@ -272,3 +272,19 @@ def test_laplacian_eigenfunctions_beyond_float64_is_an_error(size):
     mesh = trimesh.creation.icosphere(2)
     with pytest.raises(ValueError, match="beyond float64's range"):
         laplacian_eigenfunctions((mesh.vertices * size, np.asarray(mesh.faces)), 6)
+
+
+def test_a_lost_copy_of_a_repeated_eigenvalue_is_detected_by_inertia():
+    # ARPACK once returned the sphere's 0, 2 (x3), 6 (x4 of 5), 12, 12 at size 1e-30:
+    # the count of the pencil's eigenvalues below the last cluster must show it.
+    from sklearn_meshph.spectral.eigensolver import _missed_eigenvalues, eigen_shift
+    from sklearn_meshph.spectral.factorization import ShiftInvertOperator
+
+    mesh = trimesh.creation.icosphere(4)
+    L, M = cotangent_laplacian(mesh.vertices, np.asarray(mesh.faces))
+    values, _ = generalized_eigenpairs(L, M, 11, points=mesh.vertices)
+    op = ShiftInvertOperator(L - eigen_shift(L, M) * M, points=mesh.vertices)
+    assert _missed_eigenvalues(L, M, values[:10], op) is None
+    lost = np.concatenate([values[:8], values[9:11]])  # one 6 missing, two 12s
+    assert "found 8 eigenvalues below" in _missed_eigenvalues(L, M, lost, op)
+    assert "the pencil has 9" in _missed_eigenvalues(L, M, lost, op)

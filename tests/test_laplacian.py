@@ -123,9 +123,11 @@ def test_public_eigenfunctions_match_dense_eigh_at_2562_vertices():
     for solver in SOLVER_NAMES:
         values, vectors = laplacian_eigenfunctions((vertices, faces), 10, solver=solver)
         np.testing.assert_allclose(values, ref_values, rtol=1e-10, atol=1e-10 * ref_values[-1])
-        # Simple eigenvalues: each vector is the reference one up to its sign.
+        # Simple eigenvalues: each vector is the reference one up to its sign, within
+        # the Lanczos run's stopping bound (eigensolver._TOLERANCE, 1e-8 relative:
+        # with numpy 2.4 and numba 0.68 it stopped at 2.1e-9 here, 1e-9 before).
         signs = np.sign(np.einsum("i,ij,ij->j", M.diagonal(), vectors, ref_vectors))
-        np.testing.assert_allclose(vectors, signs * ref_vectors, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(vectors, signs * ref_vectors, rtol=0, atol=1e-8)
 
 
 @pytest.mark.parametrize("laplacian", ["cotangent", "graph"])
