@@ -81,6 +81,13 @@ def test_fold_stack_refuses_a_stack_of_other_samples(graphs):
     distances = GraphPairDistances().fit(X)
     with pytest.raises(ValueError, match="stack has shape"):
         distances.fold_stack(np.zeros((3, 3, 10)), [0], [1, 2])
+    stack = distances.fit_transform(X)
+    with pytest.raises(ValueError, match="train: index -1 is not one of the 24"):
+        distances.fold_stack(stack, [0], [1, -1])
+    with pytest.raises(ValueError, match="rows: index 24 is not one of"):
+        distances.fold_stack(stack, [24], [1])
+    with pytest.raises(ValueError, match="rows must be a 1-d array"):
+        distances.fold_stack(stack, [0.5], [1])
     with pytest.raises(ValueError, match="features"):
         GraphPairDistances(features="euclidean").fit(X)
 

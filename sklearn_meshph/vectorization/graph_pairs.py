@@ -182,6 +182,19 @@ class GraphPairDistances(SampleTransformer):
         ]
         return np.dstack(parts)
 
+    def _indices(self, part, name: str) -> np.ndarray:
+        """``part`` as indices of fitted samples (negative ones would wrap silently)."""
+        part = np.asarray(part)
+        if part.ndim != 1 or not (np.issubdtype(part.dtype, np.integer) or part.size == 0):
+            raise ValueError(f"{name} must be a 1-d array of sample indices")
+        outside = (part < 0) | (part >= self.n_features_in_)
+        if outside.any():
+            raise ValueError(
+                f"{name}: index {part[outside][0]} is not one of the "
+                f"{self.n_features_in_} fitted samples"
+            )
+        return part.astype(np.intp)
+
     def fold_stack(self, stack, rows, train) -> np.ndarray:
         """The distances of samples ``rows`` to samples ``train`` that this transformer
         fitted on the samples ``train`` alone would give, from ``stack``, its
@@ -209,7 +222,9 @@ class GraphPairDistances(SampleTransformer):
                 f"stack has shape {stack.shape}, expected the fitted samples' "
                 f"{(self.n_features_in_, self.n_features_in_, self.n_positions_)}"
             )
-        rows, train = np.asarray(rows, dtype=np.intp), np.asarray(train, dtype=np.intp)
+        rows, train = (
+            self._indices(part, name) for part, name in ((rows, "rows"), (train, "train"))
+        )
         out = np.array(stack[np.ix_(rows, train)], dtype=np.float64)
         if self.features == "standardized":
             fold = clone(self)
