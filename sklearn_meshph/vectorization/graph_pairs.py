@@ -9,7 +9,6 @@ from numbers import Integral
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
-from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer
@@ -46,6 +45,22 @@ def _check_finite(features: np.ndarray) -> np.ndarray:
         i, j = np.argwhere(bad)[0]
         raise ValueError(f"graph {i}: feature {j} is {features[i, j]}, not finite")
     return features
+
+
+def _log_statistics(fitted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation of the log-scaled ``fitted`` features, the deviation
+    ``inf`` where a feature is constant on them (it separates none of them: left out)."""
+    logs = _log_scaled(_check_finite(fitted))
+    mean, scale = logs.mean(axis=0), logs.std(axis=0)
+    return mean, np.where(scale > 1e-12 * (1 + np.abs(mean)), scale, np.inf)
+
+
+def _standardized_distances(features, fitted, mean, scale) -> np.ndarray:
+    """Squared Euclidean distances of the log-scaled features standardized by
+    ``mean`` and ``scale``, ``features`` against ``fitted``."""
+    _check_finite(features)
+    left, right = ((_log_scaled(part) - mean) / scale for part in (features, fitted))
+    return cdist(left, right, "sqeuclidean")
 
 
 def _pattern_distances(left, right) -> np.ndarray:
@@ -156,23 +171,12 @@ class GraphPairDistances(SampleTransformer):
 
     def _standardize(self, fitted: np.ndarray) -> None:
         """Learn the log-scaled features' means and scales on the ``fitted`` rows."""
-        logs = _log_scaled(_check_finite(fitted))
-        self.features_mean_ = logs.mean(axis=0)
-        scale = logs.std(axis=0)
-        # A feature constant on the fitted graphs separates none of them: left out.
-        self.features_scale_ = np.where(
-            scale > 1e-12 * (1 + np.abs(self.features_mean_)), scale, np.inf
-        )
+        self.features_mean_, self.features_scale_ = _log_statistics(fitted)
 
     def _feature_distances(self, features: np.ndarray, fitted: np.ndarray) -> np.ndarray:
         if self.features == "canberra":
             return np.nan_to_num(cdist(features, fitted, "canberra"))
-        _check_finite(features)
-        left, right = (
-            (_log_scaled(part) - self.features_mean_) / self.features_scale_
-            for part in (features, fitted)
-        )
-        return cdist(left, right, "sqeuclidean")
+        return _standardized_distances(features, fitted, self.features_mean_, self.features_scale_)
 
     def _stack(self, sliced, features, patterns):
         parts = [
@@ -225,11 +229,12 @@ class GraphPairDistances(SampleTransformer):
         rows, train = (
             self._indices(part, name) for part, name in ((rows, "rows"), (train, "train"))
         )
-        out = np.array(stack[np.ix_(rows, train)], dtype=np.float64)
+        # The fancy index copies already: no second copy of a 1.5 GB block (NCI1).
+        out = np.asarray(stack[np.ix_(rows, train)], dtype=np.float64)
         if self.features == "standardized":
-            fold = clone(self)
-            fold._standardize(self.features_[train])
-            out[:, :, -1] = fold._feature_distances(self.features_[rows], self.features_[train])
+            fitted = self.features_[train]
+            statistics = _log_statistics(fitted)
+            out[:, :, -1] = _standardized_distances(self.features_[rows], fitted, *statistics)
         return out
 
     def fit(self, X, y=None):
