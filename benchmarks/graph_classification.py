@@ -2,28 +2,30 @@
 
 PersLay (Carriere et al., AISTATS 2020): 10-fold shuffled cross-validation
 (``KFold(10, shuffle=True)``), repeated 10 times (seeds 0 to 9 here), mean accuracy.
-The classifier is the library's fixed recipe: nothing is tuned on these datasets (with
-``--min-samples-leaf 1 5`` the forest's leaf size is chosen inside each fit from the
-training folds' out-of-bag votes; with ``--classifier kernels`` the kernels summed and
-the SVM's C are chosen by cross-validation inside each training fold), so no setting
-can have seen a test fold. The steps before the classifier (signatures, persistence,
-features, or the distances between each pair of graphs) learn nothing from the
-training graphs but the kernel SVM's standardization of the features, so they run once
-per dataset and only the classifier is fitted per
-fold (on the training block of the distances, the pairwise slicing of
-``cross_validate``; for the kernel SVM ``GraphPairDistances.fold_stack``, which also
-standardizes the features on the training graphs): the same predictions as fitting the
+The classifier is the library's default (``classifier="auto"``: the kernel SVM when a
+fold has at most 2,000 training graphs, the forest above; ``--classifier kernels`` or
+``trees`` forces one). Nothing is tuned on these datasets: the kernels summed and the
+SVM's C are chosen by cross-validation inside each training fold, the forest has fixed
+settings (with ``--min-samples-leaf 1 5`` its leaf size is chosen inside each fit from
+the training folds' out-of-bag votes), so no setting can have seen a test fold. The
+steps before the classifier (signatures, persistence, features, or the distances
+between each pair of graphs) learn nothing from the training graphs but the kernel
+SVM's standardization of the features, so they run once per dataset and only the
+classifier is fitted per fold (on the training rows of the features; for the kernel
+SVM on ``GraphPairDistances.fold_stack``, the training block of the distances with the
+features standardized on the training graphs): the same predictions as fitting the
 whole pipeline per fold, at a fraction of the time.
 
 Prints, per dataset, the mean accuracy and its standard deviation over the repeats
 beside PersLay's published mean, the time (features and the 100 fits), the peak
-memory and what the fits chose (the leaf size, or the kernels and C; how many chose
-each); then the total time.
+memory and what the fits chose (the kernels and C, or the forest's leaf size; how many
+chose each); then the total time.
 
     python benchmarks/graph_classification.py                  # the six, 10 x 10 folds
     python benchmarks/graph_classification.py --repeats 1 --datasets MUTAG COX2
-    python benchmarks/graph_classification.py --min-samples-leaf 1 5   # leaf size chosen
-    python benchmarks/graph_classification.py --classifier kernels     # the kernel SVM
+    python benchmarks/graph_classification.py --classifier trees       # the forest only
+    python benchmarks/graph_classification.py --classifier kernels     # the kernel SVM only
+    python benchmarks/graph_classification.py --classifier trees --min-samples-leaf 1 5
 """
 
 import argparse
@@ -33,9 +35,11 @@ import numpy as np
 from _common import DATA, peak_memory
 from joblib import Parallel, delayed
 from sklearn.base import clone
-from sklearn.model_selection import KFold, cross_validate
+from sklearn.model_selection import KFold
+from sklearn.pipeline import Pipeline
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
+from sklearn_meshph.size_switch import SizeSwitchClassifier
 
 KERNELS = ("diagrams", "patterns", "features")
 PERSLAY = {
@@ -49,34 +53,48 @@ PERSLAY = {
 
 
 def choice(fitted):
-    """What a fit chose: its leaf size, or the kernels summed and C."""
+    """What a fit chose: the kernels summed and C, or the forest's leaf size."""
     if hasattr(fitted, "C_"):
         kernels = "+".join(KERNELS[g] for g in np.flatnonzero(fitted.weights_))
         return f"{kernels} C={fitted.C_:g}"
-    return getattr(fitted, "min_samples_leaf_", fitted.min_samples_leaf)
+    return f"trees, leaf {getattr(fitted, 'min_samples_leaf_', fitted.min_samples_leaf)}"
 
 
 def evaluate(graphs, y, repeats, n_jobs, options, scores, leaves):
     """Append to ``scores`` the mean accuracy (%) of each repeat of PersLay's protocol,
     to ``leaves`` what each fit chose."""
     model = make_graph_classifier(n_jobs=n_jobs, **options)
-    features = model[:-1].fit_transform(graphs)
+    fields = model[0].fit_transform(graphs)
     final = model[-1]
+    if isinstance(final, SizeSwitchClassifier):  # "auto": by the training graphs
+        limit, kernels, trees = final.max_small_samples, final.small, final.large
+    else:
+        steps = Pipeline(model.steps[1:])
+        limit = len(y) if options["classifier"] == "kernels" else -1
+        kernels = trees = steps
+    stack = features = None
     for seed in range(repeats):
-        cv = KFold(10, shuffle=True, random_state=seed)
-        if options["classifier"] == "kernels":
+        folds = list(KFold(10, shuffle=True, random_state=seed).split(graphs))
+        small = [fold for fold in folds if len(fold[0]) <= limit]
+        large = [fold for fold in folds if len(fold[0]) > limit]
+        results = []
+        if small:
+            if stack is None:
+                stack = kernels[:-1].fit_transform(fields)
             # The folds in parallel (the forest's trees are already): each slices the
             # stack and standardizes the features on its training graphs.
-            folds = Parallel(n_jobs=n_jobs)(
-                delayed(kernel_fold)(final, model[-2], features, y, train, test)
-                for train, test in cv.split(graphs)
+            results += Parallel(n_jobs=n_jobs)(
+                delayed(kernel_fold)(kernels[-1], kernels[-2], stack, y, train, test)
+                for train, test in small
             )
-            scores.append(100 * np.mean([score for score, _ in folds]))
-            leaves += [chosen for _, chosen in folds]
-            continue
-        result = cross_validate(clone(final), features, y, cv=cv, return_estimator=True)
-        scores.append(100 * result["test_score"].mean())
-        leaves += [choice(fitted) for fitted in result["estimator"]]
+        if large:
+            if features is None:
+                features = trees[:-1].fit_transform(fields)
+            for train, test in large:
+                fitted = clone(trees[-1]).fit(features[train], y[train])
+                results.append((fitted.score(features[test], y[test]), choice(fitted)))
+        scores.append(100 * np.mean([score for score, _ in results]))
+        leaves += [chosen for _, chosen in results]
 
 
 def kernel_fold(final, distances, stack, y, train, test):
@@ -96,8 +114,8 @@ def main():
     )
     parser.add_argument(
         "--classifier",
-        choices=["trees", "kernels"],
-        default="trees",
+        choices=["auto", "kernels", "trees"],
+        default="auto",
         help="make_graph_classifier's",
     )
     parser.add_argument("--data", default=str(DATA / "tu"), help="folder of the TU datasets")

@@ -23,6 +23,7 @@ from .diagrams.distances import METRICS
 from .leaf_forest import LeafSizeForest
 from .persistence import LowerStarPersistence
 from .persistence.filtrations import FILTRATIONS
+from .size_switch import SizeSwitchClassifier
 from .spectral import LAPLACIANS, SIGNATURES, SOLVERS, LaplacianEigenTransformer, ShapeDNA
 from .spectral.cache import cache_of
 from .vectorization import (
@@ -65,6 +66,10 @@ _GRAPH_KINDS = ("ord0", "ord1", "ext0", "ext1")
 _GRAPH_TREES = 300
 # Weisfeiler-Lehman iterations of make_graph_classifier's GraphFeatures.
 _GRAPH_WL_ITERATIONS = 3
+# The largest training set of make_graph_classifier's kernel SVM (classifier="auto"):
+# its distances grow as the square of the training graphs (2,000 graphs: 2 million
+# pairs, a 0.45 GB stack, minutes on 2 cores); the trees above (docs/graphs.md).
+_GRAPH_KERNEL_SAMPLES = 2000
 
 
 def _kind_persistence(kind, common):
@@ -449,7 +454,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
 @validate_params(
     {
         "times": [tuple, list],
-        "classifier": [Options(("trees", "kernels"))],
+        "classifier": [Options(("auto", "kernels", "trees"))],
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
@@ -461,7 +466,7 @@ def make_mesh_features(*, memory=None, n_jobs=None, random_state=0, verbose=0):
 def make_graph_classifier(
     *,
     times=_GRAPH_CLASSIFIER_TIMES,
-    classifier="trees",
+    classifier="auto",
     n_estimators=_GRAPH_TREES,
     min_samples_leaf=1,
     memory=None,
@@ -469,44 +474,59 @@ def make_graph_classifier(
     random_state=0,
     verbose=0,
 ):
-    """A classifier of graphs: signatures, their extended persistence, features, trees.
+    """A classifier of graphs: signatures, their extended persistence, a kernel SVM or trees.
 
-    Three steps, each searchable like any pipeline's (``GridSearchCV`` over
-    ``classifier__max_features``, ``features__graph__n_bins``, ``eigen__times``...):
+    The steps, each searchable like any pipeline's (``GridSearchCV`` over
+    ``classifier__small__classifier__C``, ``classifier__large__features__graph__n_bins``,
+    ``eigen__times``...):
 
     - ``"eigen"``: a :class:`LaplacianEigenTransformer` with PersLay's setting, the
       heat kernel signatures of the symmetric normalized Laplacian at fixed ``times``
       from every eigenpair (a dense solve), whole graphs (``components="all"``: a
       graph's components are part of it), no normalization;
-    - ``"features"``: a ``FeatureUnion`` of ``"diagrams"`` (:class:`LowerStarPersistence`
-      with ``filtration="extended"``: the four diagrams of each signature on the graph,
-      then :class:`DiagramStatistics`) and ``"graph"`` (:class:`GraphFeatures`: size,
-      degrees, the spectrum's histogram, the signatures' quantiles, histograms of
-      the distances between pairs of nodes, and hashed counts of the
-      Weisfeiler-Lehman patterns of the degrees);
-    - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
-      features of very different ranges and no tuning (or, given candidate leaf
-      sizes, a :class:`~sklearn_meshph.leaf_forest.LeafSizeForest` choosing one per
-      fit by out-of-bag accuracy on the training graphs).
+    - ``"classifier"``: a :class:`~sklearn_meshph.size_switch.SizeSwitchClassifier`
+      fitting, on at most 2,000 training graphs, its ``small`` pipeline, the kernel
+      SVM:
 
-    Edge weights enter the Laplacian only (:class:`GraphFeatures` reads the edges);
+      - ``"distances"`` (:class:`GraphPairDistances`): the sliced Wasserstein distance
+        of each of the four extended diagrams (:class:`LowerStarPersistence` with
+        ``filtration="extended"``) of each signature, the Weisfeiler-Lehman patterns'
+        distance of the degrees, the distance of the features (below) log-scaled and
+        standardized on the training graphs;
+      - ``"classifier"`` (:class:`KernelSumSVC`): the diagrams' kernels averaged into
+        one, which kernels to sum and ``C`` chosen by internal cross-validation on the
+        training graphs;
+
+      and on more training graphs (where the distances between every pair, which grow
+      as their square, would cost minutes to hours) its ``large`` pipeline, trees:
+
+      - ``"features"``: a ``FeatureUnion`` of ``"diagrams"`` (the four extended
+        diagrams of each signature, then :class:`DiagramStatistics`) and ``"graph"``
+        (:class:`GraphFeatures`: size, degrees, the spectrum's histogram, the
+        signatures' quantiles, histograms of the distances between pairs of nodes, and
+        hashed counts of the Weisfeiler-Lehman patterns of the degrees);
+      - ``"classifier"``: an ``ExtraTreesClassifier``, which needs no scaling of these
+        features of very different ranges and no tuning (or, given candidate leaf
+        sizes, a :class:`~sklearn_meshph.leaf_forest.LeafSizeForest` choosing one per
+        fit by out-of-bag accuracy on the training graphs).
+
+    Edge weights enter the Laplacian only (the features and patterns read the edges);
     node labels or attributes are not used. Nothing in it is tuned per dataset;
-    ``docs/graphs.md`` has its accuracy under PersLay's protocol on six TU datasets.
+    ``docs/graphs.md`` has its accuracy under PersLay's protocol on six TU datasets
+    (the kernel SVM ahead of the trees on MUTAG, COX2, DHFR and PROTEINS, behind on
+    NCI1 and IMDB-BINARY).
 
     Parameters
     ----------
     times : tuple of float, default=(0.1, 1.0, 10.0)
         Times of the heat kernel signatures: PersLay's 0.1 and 10, and 1 between them.
-    classifier : {"trees", "kernels"}, default="trees"
-        ``"kernels"``: the steps after ``"eigen"`` are ``"distances"``
-        (:class:`GraphPairDistances`: sliced Wasserstein distances of the diagrams, the
-        Weisfeiler-Lehman patterns' distance, the distance of the features
-        log-scaled and standardized on the training graphs) and
-        ``"classifier"`` (:class:`KernelSumSVC`: the diagrams' kernels averaged into
-        one, the sum of kernels and ``C`` chosen by internal cross-validation on the
-        training graphs); ``n_estimators`` and ``min_samples_leaf`` are then unused.
+    classifier : {"auto", "kernels", "trees"}, default="auto"
+        ``"auto"``: the switch above. ``"kernels"``: the kernel SVM at any size, its
+        two steps after ``"eigen"`` (``"distances"``, ``"classifier"``).
+        ``"trees"``: the trees at any size, their two steps after ``"eigen"``
+        (``"features"``, ``"classifier"``).
     n_estimators : int, default=300
-        Trees of the forest (of each candidate forest).
+        Trees of the forest (of each candidate forest); unused by ``"kernels"``.
     min_samples_leaf : int or tuple of int, default=1
         The forest's leaf size, or candidate sizes chosen per fit out of bag (a
         :class:`~sklearn_meshph.leaf_forest.LeafSizeForest`; ``docs/graphs.md``
@@ -514,10 +534,11 @@ def make_graph_classifier(
     memory : str, path, joblib.Memory or None, default=None
         Cache of the eigensolves (see :class:`LaplacianEigenTransformer`).
     n_jobs : int, default=None
-        Parallel jobs of the eigen stage, persistence and the forest (joblib).
+        Parallel jobs of the eigen stage, persistence, the distances and the forest
+        (joblib).
     random_state : int, RandomState or None, default=0
-        Seed of the forest (and of the eigen stage's start vector, which a dense solve
-        does not use).
+        Seed of the SVM's internal folds, of the forest (and of the eigen stage's start
+        vector, which a dense solve does not use).
     verbose : int, default=0
         Progress bars of the stages that have them.
 
@@ -551,15 +572,15 @@ def make_graph_classifier(
         {"memory": memory, "n_jobs": n_jobs, "random_state": random_state, "verbose": verbose},
         tuple(times),
     )
-    if classifier == "kernels":
-        groups = (0,) * (len(_GRAPH_KINDS) * len(times)) + (1, 2)
-        return Pipeline(
-            [
-                ("eigen", eigen),
-                ("distances", GraphPairDistances(n_jobs=n_jobs)),
-                ("classifier", KernelSumSVC(groups, random_state=random_state)),
-            ]
-        )
+    kernels = [
+        ("distances", GraphPairDistances(n_jobs=n_jobs)),
+        (
+            "classifier",
+            KernelSumSVC(
+                (0,) * (len(_GRAPH_KINDS) * len(times)) + (1, 2), random_state=random_state
+            ),
+        ),
+    ]
     diagrams = Pipeline(
         [
             (
@@ -570,16 +591,26 @@ def make_graph_classifier(
         ]
     )
     graph = GraphFeatures(wl_iterations=_GRAPH_WL_ITERATIONS)
-    features = FeatureUnion([("diagrams", diagrams), ("graph", graph)])
     if isinstance(min_samples_leaf, tuple | list):
-        trees = LeafSizeForest(
+        forest = LeafSizeForest(
             n_estimators, tuple(min_samples_leaf), n_jobs=n_jobs, random_state=random_state
         )
     else:
-        trees = ExtraTreesClassifier(
+        forest = ExtraTreesClassifier(
             n_estimators,
             min_samples_leaf=min_samples_leaf,
             n_jobs=n_jobs,
             random_state=random_state,
         )
-    return Pipeline([("eigen", eigen), ("features", features), ("classifier", trees)])
+    trees = [
+        ("features", FeatureUnion([("diagrams", diagrams), ("graph", graph)])),
+        ("classifier", forest),
+    ]
+    if classifier == "kernels":
+        return Pipeline([("eigen", eigen), *kernels])
+    if classifier == "trees":
+        return Pipeline([("eigen", eigen), *trees])
+    switch = SizeSwitchClassifier(
+        Pipeline(kernels), Pipeline(trees), max_small_samples=_GRAPH_KERNEL_SAMPLES
+    )
+    return Pipeline([("eigen", eigen), ("classifier", switch)])

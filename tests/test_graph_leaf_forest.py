@@ -56,10 +56,10 @@ def test_graph_classifier_chooses_its_leaf_size_per_fit_when_given_candidates():
     """make_graph_classifier(min_samples_leaf=(1, 5)) picks leaves of 1 or 5 graphs inside
     each fit; an int, the default 1, is the plain forest."""
     cycles = [(n, np.array([[i, (i + 1) % n] for i in range(n)])) for n in range(5, 25)]
-    plain = make_graph_classifier(n_estimators=5)
+    plain = make_graph_classifier(classifier="trees", n_estimators=5)
     assert isinstance(plain.named_steps["classifier"], ExtraTreesClassifier)
     assert plain.get_params()["classifier__min_samples_leaf"] == 1
-    model = make_graph_classifier(n_estimators=30, min_samples_leaf=(1, 5))
+    model = make_graph_classifier(classifier="trees", n_estimators=30, min_samples_leaf=(1, 5))
     model.fit(cycles, np.arange(20) % 2)
     trees = model.named_steps["classifier"]
     assert model.get_params()["classifier__min_samples_leaf"] == (1, 5)

@@ -63,7 +63,7 @@ def test_classifier_separates_cycles_stars_complete_graphs(graphs):
 
 def test_classifier_clone_pickle_params(graphs):
     X, y = graphs
-    model = make_graph_classifier(n_estimators=10, random_state=3)
+    model = make_graph_classifier(classifier="trees", n_estimators=10, random_state=3)
     params = model.get_params()
     assert params["classifier__n_estimators"] == 10
     assert params["eigen__laplacian"] == "normalized"
@@ -79,7 +79,7 @@ def test_classifier_clone_pickle_params(graphs):
 def test_classifier_grid_search_over_a_step_parameter(graphs):
     X, y = graphs
     search = GridSearchCV(
-        make_graph_classifier(n_estimators=10),
+        make_graph_classifier(classifier="trees", n_estimators=10),
         {"features__graph__n_bins": [5, 10]},
         cv=KFold(3, shuffle=True, random_state=0),
     ).fit(X, y)
@@ -89,9 +89,12 @@ def test_classifier_grid_search_over_a_step_parameter(graphs):
 
 def test_classifier_same_for_any_n_jobs(graphs):
     X, y = graphs
-    one = make_graph_classifier(n_estimators=10, n_jobs=1).fit(X, y).predict_proba(X)
-    two = make_graph_classifier(n_estimators=10, n_jobs=2).fit(X, y).predict_proba(X)
-    np.testing.assert_array_equal(one, two)
+    for kind, method in (("trees", "predict_proba"), ("auto", "decision_function")):
+        one, two = (
+            getattr(make_graph_classifier(classifier=kind, n_jobs=n).fit(X, y), method)(X)
+            for n in (1, 2)
+        )
+        np.testing.assert_array_equal(one, two)
 
 
 def test_classifier_refuses_bad_parameters():
@@ -167,7 +170,7 @@ def test_graph_preset_gives_a_distance_matrix(graphs):
 def test_mutag_accuracy_floor():
     """A quick CV on MUTAG (structure only) reaches a sane accuracy."""
     graphs, y = load_tu_dataset(data_folder("tu/MUTAG", "TU MUTAG"))
-    model = make_graph_classifier(n_estimators=100)
+    model = make_graph_classifier(classifier="trees", n_estimators=100)
     features = model[:-1].fit_transform(graphs)
     scores = cross_val_score(model[-1], features, y, cv=KFold(5, shuffle=True, random_state=0))
     assert scores.mean() > 0.8
