@@ -30,6 +30,7 @@ from .diagrams import (
     wasserstein_distance,
 )
 from .graph import Graph, check_graph, load_tu_dataset
+from .graph_classifier import make_graph_classifier
 from .mesh import (
     CleaningReport,
     MeshCleaningWarning,
@@ -39,7 +40,7 @@ from .mesh import (
     weld_vertices,
 )
 from .persistence import LowerStarPersistence, extended_persistence, lower_star_persistence
-from .pipelines import make_graph_classifier, make_mesh_distance, make_mesh_features
+from .pipelines import make_mesh_distance, make_mesh_features
 from .pointcloud import check_point_cloud
 from .pointcloud.laplacians import point_cloud_laplacian
 from .retrieval import ShapeNeighbors, ShapeNeighborsClassifier, retrieval_scores

@@ -20,13 +20,14 @@ __all__ = ["SizeSwitchClassifier"]
 
 
 def _chosen_has(name: str):
-    """``available_if`` test: the fitted estimator has ``name`` (before ``fit``, both
-    candidates have it)."""
+    """``available_if`` test: the fitted estimator has ``name`` (before ``fit``, one of
+    the candidates has it: which one a fit chooses is not known yet, and a wrapper such
+    as ``CalibratedClassifierCV`` asks before fitting)."""
 
     def check(self) -> bool:
         if hasattr(self, "estimator_"):
             return hasattr(self.estimator_, name)
-        return hasattr(self.small, name) and hasattr(self.large, name)
+        return hasattr(self.small, name) or hasattr(self.large, name)
 
     return check
 
@@ -167,6 +168,22 @@ class SizeSwitchClassifier(ClassifierMixin, BaseEstimator):
         ndarray of shape (n_samples,)
         """
         return self._batched("predict", X)
+
+    def score(self, X, y, sample_weight=None):
+        """Mean accuracy of :meth:`predict` on ``X`` against ``y`` (weighted by
+        ``sample_weight``).
+
+        Parameters
+        ----------
+        X : sequence or array-like of n_samples samples
+        y : array-like of shape (n_samples,)
+        sample_weight : array-like of shape (n_samples,), default=None
+
+        Returns
+        -------
+        float
+        """
+        return super().score(X, y, sample_weight=sample_weight)
 
     @available_if(_chosen_has("predict_proba"))
     def predict_proba(self, X):

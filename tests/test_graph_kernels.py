@@ -180,8 +180,19 @@ def test_kernel_sum_refuses_bad_parameters():
         KernelSumSVC(groups=[0]).fit(stack, y)
     with pytest.raises(ValueError, match="C must be a non-empty sequence"):
         KernelSumSVC(C=(1.0, 0.0)).fit(stack, y)
-    with pytest.raises(ValueError, match="fewer than the cv=5"):
-        KernelSumSVC().fit(stack[:4, :4], y[:4])
+    with pytest.raises(ValueError, match="1 training sample: .* needs at least 2"):
+        KernelSumSVC().fit(stack[:1, :1], y[:1])
+
+
+def test_kernel_sum_on_fewer_samples_than_folds_leaves_one_out():
+    stack, y = separable_stack()
+    rows = [0, 1, 20, 21]  # two of each class
+    few, labels = stack[np.ix_(rows, rows)], y[rows]
+    assert len(np.unique(labels)) == 2
+    model = KernelSumSVC().fit(few, labels)  # cv=5 > 4 samples: four folds of one
+    same = KernelSumSVC(cv=4).fit(few, labels)
+    assert model.cv_scores_ == same.cv_scores_
+    np.testing.assert_array_equal(model.decision_function(few), same.decision_function(few))
     # A bandwidth whose square under- or overflows made NaN kernels or an OverflowError.
     for bandwidth in (1e-300, 1e300, np.inf):
         with pytest.raises(ValueError, match="'bandwidth' parameter of KernelSumSVC"):

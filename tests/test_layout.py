@@ -27,7 +27,8 @@ LAYERS = (
     ("persistence",),
     ("diagrams",),
     ("vectorization",),
-    ("combine", "leaf_forest"),
+    ("combine", "leaf_forest", "size_switch"),
+    ("graph_classifier",),
     ("pipelines", "datasets", "plotting", "retrieval"),
     ("_report", "_cli_args", "_cli_messages", "cli", "__main__"),
 )

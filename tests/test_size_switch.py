@@ -74,8 +74,9 @@ def test_batches_change_no_prediction(batch_size):
 def test_methods_follow_the_chosen_estimator():
     X, y = rows()
     model = SizeSwitchClassifier(SVC(), DecisionTreeClassifier(), max_small_samples=39)
-    # Before fit a method is there when both candidates have it.
-    assert not hasattr(model, "predict_proba") and not hasattr(model, "decision_function")
+    # Before fit a method is there when one of the candidates has it.
+    assert hasattr(model, "predict_proba") and hasattr(model, "decision_function")
+    assert not hasattr(switch(), "decision_function")  # neither k-NN nor the tree
     model.fit(X, y)  # 40 samples: the tree
     assert hasattr(model, "predict_proba") and not hasattr(model, "decision_function")
     model.set_params(max_small_samples=40).fit(X, y)  # the SVM, no probabilities
@@ -165,3 +166,29 @@ def test_tags_follow_the_candidates():
     assert not get_tags(switch()).input_tags.allow_nan  # k-NN refuses them
     both = SizeSwitchClassifier(HistGradientBoostingClassifier(), DecisionTreeClassifier())
     assert get_tags(both).input_tags.allow_nan
+
+
+def test_graph_classifier_default_fits_a_handful_of_graphs():
+    """The old default (trees) fitted on three graphs; the kernel SVM's internal
+    cross-validation then leaves one out instead of refusing."""
+    graphs, y = [cycle(5), cycle(7), path(6)], [0, 0, 1]
+    model = make_graph_classifier().fit(graphs, y)
+    assert set(model.predict([cycle(6), path(8)])) <= {0, 1}
+    assert len(model[-1].estimator_[-1].cv_scores_) == 21  # 3 folds of one graph each
+    graphs, y = [cycle(5), cycle(7), cycle(9), path(6), path(8), path(10)], [0] * 3 + [1] * 3
+    model = make_graph_classifier().fit(graphs, y)
+    assert model.predict([cycle(6), path(7)]).tolist() == [0, 1]
+    with pytest.raises(ValueError, match="at least 2"):
+        make_graph_classifier().fit([cycle(5)], [0])
+
+
+def test_probabilities_of_the_default_through_calibration():
+    """The default's SVM has no predict_proba; CalibratedClassifierCV around it gives
+    them (it asks for a method before fitting, which the switch answers)."""
+    from sklearn.calibration import CalibratedClassifierCV
+
+    graphs = [f(n) for f in (cycle, path) for n in range(5, 17)]
+    y = np.repeat([0, 1], 12)
+    model = CalibratedClassifierCV(make_graph_classifier(), cv=3).fit(graphs, y)
+    proba = model.predict_proba([cycle(18), path(18)])
+    assert proba.shape == (2, 2) and proba[0, 0] > 0.5 and proba[1, 1] > 0.5

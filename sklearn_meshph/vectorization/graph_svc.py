@@ -48,7 +48,8 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
     C : sequence of float, default=(1.0, 10.0, 100.0)
         Candidate regularizations of the SVM.
     cv : int, default=5
-        Folds of the internal cross-validation.
+        Folds of the internal cross-validation (one per sample, leave-one-out, when
+        there are fewer samples than that).
     max_selection_samples : int, default=1000
         At most this many training samples (drawn at random) choose the kernels and
         ``C``; the SVM kept is fitted on all of them.
@@ -180,8 +181,10 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         check_classification_targets(y)
         if len(y) != len(X):
             raise ValueError(f"X has {len(X)} samples, y has {len(y)}")
-        if len(y) < self.cv:
-            raise ValueError(f"{len(y)} samples, fewer than the cv={self.cv} internal folds")
+        if len(y) < 2:
+            raise ValueError(
+                f"{len(y)} training sample: the internal cross-validation needs at least 2"
+            )
         self.group_of_ = self._groups(X.shape[2])
         self.n_groups_ = self.group_of_.max() + 1
         self.scales_ = np.array([median_scale(X[:, :, k]) for k in range(X.shape[2])])
@@ -190,7 +193,9 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         chosen = np.arange(len(y))
         if len(y) > self.max_selection_samples:
             chosen = np.sort(rng.choice(len(y), self.max_selection_samples, replace=False))
-        folds = list(KFold(self.cv, shuffle=True, random_state=rng).split(chosen))
+        # Fewer samples than folds: leave-one-out (a fit on a handful of samples works).
+        n_folds = min(self.cv, len(chosen))
+        folds = list(KFold(n_folds, shuffle=True, random_state=rng).split(chosen))
         self.cv_scores_ = {}
         for weights in itertools.product((0, 1), repeat=self.n_groups_):
             if not any(weights):
