@@ -1,6 +1,7 @@
 """The graph classifier, its features and the graph preset."""
 
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -176,19 +177,53 @@ def test_mutag_accuracy_floor():
     assert scores.mean() > 0.8
 
 
-def test_graph_features_refuse_pair_histograms_of_huge_graphs():
-    n = 4001
-    field = ScalarField(
+def path_field(n):
+    """A path of n nodes as a graph field (its spectrum and signatures zero: the pair
+    histograms read the edges)."""
+    return ScalarField(
         np.zeros((n, 0)),
         np.zeros((0, 3), dtype=np.int64),
         np.zeros((n, 2)),
         spectrum=np.zeros(n),
         edges=np.c_[np.arange(n - 1), np.arange(1, n)],
     )
+
+
+def test_graph_features_refuse_only_what_would_not_fit():
+    field = path_field(10001)
     assert field.is_graph
-    with pytest.raises(ValueError, match="sample 0: 4001 nodes, more than the 4000 .*pairs=False"):
+    message = "sample 0: 10001 nodes, more than the 10000 .*pairs=False"
+    with pytest.raises(ValueError, match=message):
         GraphFeatures().fit([field])
     assert GraphFeatures(pairs=False).fit_transform([field]).shape[0] == 1
+    with pytest.raises(ValueError, match="sample 0: 4001 nodes, .*n_resistance_bins=0"):
+        GraphFeatures(pairs=False, n_resistance_bins=10).fit([path_field(4001)])
+
+
+def test_pair_histograms_of_large_graphs_from_a_fixed_sample_of_nodes(monkeypatch):
+    """Above the limit the histograms count the pairs of a fixed sample of nodes, with
+    the whole graph's distances: close to the exact histograms, the same every time."""
+    from sklearn_meshph.vectorization import graph_features
+
+    field = path_field(600)
+    names = list(GraphFeatures().fit([field]).get_feature_names_out())
+    exact = GraphFeatures().fit_transform([field])[0]
+    monkeypatch.setattr(graph_features, "_MAX_PAIR_NODES", 300)
+    sampled = GraphFeatures().fit_transform([field])[0]
+    np.testing.assert_array_equal(GraphFeatures().fit_transform([field])[0], sampled)
+    def bins(prefix):
+        return [i for i, name in enumerate(names) if re.fullmatch(prefix + r"_\d+", name)]
+
+    hops, harmonic = bins("hops"), bins("harmonic")
+    assert len(hops) > 10 and len(harmonic) > 10
+    assert not np.array_equal(sampled[hops], exact[hops])  # a sample was taken
+    # 300 of the 600 nodes: each bin's share within 0.02 of the exact one.
+    np.testing.assert_allclose(sampled[hops + harmonic], exact[hops + harmonic], atol=0.02)
+    # The distances are the whole path's, not those of the sample joined as a path of
+    # 300 nodes (at most 299 hops).
+    assert sampled[names.index("hops_max")] > 550
+    mean = names.index("hops_mean")
+    assert sampled[mean] == pytest.approx(exact[mean], rel=0.02)
 
 
 def spider(leg):

@@ -41,8 +41,13 @@ _QUANTILES = (0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0)
 # Log-spaced edges of the histogram of harmonic distances (the normalized Laplacian's
 # pseudo-inverse; its values between neighbours are about 1).
 _HARMONIC_RANGE = (0.05, 50.0)
-# Dense pair matrices above this many nodes would not fit a laptop's memory.
+# Dense pair matrices above this many nodes would not fit a laptop's memory: larger
+# graphs' pair histograms are over the pairs of this many of their nodes (a fixed
+# sample), the resistances refused.
 _MAX_PAIR_NODES = 4000
+# The harmonic distances' dense eigendecomposition of the whole graph (about three
+# n x n arrays: 2.4 GB at this size) bounds the pair histograms' graphs.
+_MAX_DENSE_NODES = 10000
 _ZERO = 1e-8
 # Decimals kept of the effective resistances: far above the eigensolver's rounding,
 # far below the gaps between the resistances of small rings.
@@ -112,18 +117,37 @@ def _pseudo_inverse_distances(eigenvalues, vectors, keep, upper) -> np.ndarray:
     return diagonal[upper[0]] + diagonal[upper[1]] - 2 * gram[upper]
 
 
+def _pair_nodes(n: int) -> np.ndarray | None:
+    """The nodes whose pairs the histograms count: all (None) up to
+    ``_MAX_PAIR_NODES``, else that many drawn without replacement by a generator seeded
+    with ``n`` (the same graph always gives the same sample), sorted."""
+    if n <= _MAX_PAIR_NODES:
+        return None
+    return np.sort(np.random.default_rng(n).choice(n, _MAX_PAIR_NODES, replace=False))
+
+
 def _pairs(adjacency, max_hops: int, n_bins: int) -> np.ndarray:
     """Histograms over the node pairs of the hop distance and of the harmonic distance,
-    as fractions of the pairs; pairs in different components count as unreachable."""
+    as fractions of the pairs; pairs in different components count as unreachable.
+    Over the pairs of a fixed sample of nodes in graphs of more than
+    ``_MAX_PAIR_NODES`` (the distances still those of the whole graph)."""
     n = adjacency.shape[0]
-    upper = np.triu_indices(n, 1)
+    nodes = _pair_nodes(n)
+    upper = np.triu_indices(n if nodes is None else len(nodes), 1)
     n_pairs = max(len(upper[0]), 1)
-    hops = shortest_path(adjacency, unweighted=True, directed=False)[upper]
+    if nodes is None:
+        hops = shortest_path(adjacency, unweighted=True, directed=False)[upper]
+    else:
+        hops = shortest_path(adjacency, unweighted=True, directed=False, indices=nodes)
+        hops = hops[:, nodes][upper]
     reachable = np.isfinite(hops)
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     scale = np.divide(1.0, np.sqrt(degree), out=np.zeros(n), where=degree > 0)
     laplacian = np.eye(n) - scale[:, None] * adjacency.toarray() * scale[None, :]
     eigenvalues, vectors = np.linalg.eigh(laplacian)
+    del laplacian
+    if nodes is not None:
+        vectors = vectors[nodes]
     harmonic = _pseudo_inverse_distances(eigenvalues, vectors, eigenvalues > _ZERO, upper)
     harmonic = harmonic[reachable]
     hop_edges = np.r_[np.arange(0.5, max_hops + 1), np.inf]
@@ -247,9 +271,12 @@ class GraphFeatures(SampleTransformer):
       atom types a structure-only dataset lacks.
 
     The graph is read as unweighted (its edges). The pair and resistance histograms
-    each cost a dense eigendecomposition of each graph (cubic in its nodes) and refuse
-    graphs of more than 4000 nodes; set ``pairs=False`` and ``n_resistance_bins=0``
-    for larger graphs.
+    each cost a dense eigendecomposition of each graph (cubic in its nodes). In graphs
+    of more than 4000 nodes the pair histograms count the pairs of 4000 of their nodes
+    (a fixed sample: the same graph always gives the same features), the distances
+    still those of the whole graph, and graphs of more than 10,000 nodes are refused
+    (set ``pairs=False``); the resistance histogram refuses graphs of more than 4000
+    nodes (set ``n_resistance_bins=0``).
 
     Parameters
     ----------
@@ -358,11 +385,16 @@ class GraphFeatures(SampleTransformer):
                     f"sample {i}: {field.n_functions} signature columns, the fitted fields "
                     f"have {n_functions}"
                 )
-            if (self.pairs or self.n_resistance_bins) and field.n_vertices > _MAX_PAIR_NODES:
+            if self.n_resistance_bins and field.n_vertices > _MAX_PAIR_NODES:
                 raise ValueError(
                     f"sample {i}: {field.n_vertices} nodes, more than the "
-                    f"{_MAX_PAIR_NODES} the pair and resistance histograms allow; set "
-                    "pairs=False and n_resistance_bins=0"
+                    f"{_MAX_PAIR_NODES} the resistance histogram allows; set "
+                    "n_resistance_bins=0"
+                )
+            if self.pairs and field.n_vertices > _MAX_DENSE_NODES:
+                raise ValueError(
+                    f"sample {i}: {field.n_vertices} nodes, more than the "
+                    f"{_MAX_DENSE_NODES} the pair histograms allow; set pairs=False"
                 )
         return fields
 
