@@ -211,6 +211,7 @@ def test_pair_histograms_of_large_graphs_from_a_fixed_sample_of_nodes(monkeypatc
     monkeypatch.setattr(graph_features, "_MAX_PAIR_NODES", 300)
     sampled = GraphFeatures().fit_transform([field])[0]
     np.testing.assert_array_equal(GraphFeatures().fit_transform([field])[0], sampled)
+
     def bins(prefix):
         return [i for i, name in enumerate(names) if re.fullmatch(prefix + r"_\d+", name)]
 
