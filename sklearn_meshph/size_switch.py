@@ -9,14 +9,30 @@ from copy import deepcopy
 from numbers import Integral
 
 import numpy as np
+import scipy.sparse as sp
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.utils import get_tags
 from sklearn.utils.metaestimators import available_if
-from sklearn.utils.validation import _num_samples, check_is_fitted
+from sklearn.utils.validation import check_is_fitted
 
 from ._param_validation import HasMethods, Interval, check_params
 
 __all__ = ["SizeSwitchClassifier"]
+
+
+def _n_samples(X) -> int:
+    """The number of samples of ``X``: its first axis, or its length."""
+    shape = getattr(X, "shape", None)
+    if shape is not None and len(shape) > 0:
+        return int(shape[0])
+    if hasattr(X, "__len__"):
+        return len(X)
+    if hasattr(X, "__array__"):
+        shape = np.asarray(X).shape
+        return int(shape[0]) if shape else 0
+    raise TypeError(
+        f"SizeSwitchClassifier takes a sequence or an array-like of samples, got {type(X).__name__}"
+    )
 
 
 def _chosen_has(name: str):
@@ -126,10 +142,11 @@ class SizeSwitchClassifier(ClassifierMixin, BaseEstimator):
         self
         """
         check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
-        n_samples = _num_samples(X)
-        self.chosen_ = "small" if n_samples <= self.max_small_samples else "large"
-        template = self.small if self.chosen_ == "small" else self.large
+        chosen = "small" if _n_samples(X) <= self.max_small_samples else "large"
+        template = self.small if chosen == "small" else self.large
+        # Set together once the fit succeeded: a failed refit leaves the last fit whole.
         self.estimator_ = clone(template).fit(X, y, **fit_params)
+        self.chosen_ = chosen
         self.classes_ = self.estimator_.classes_
         return self
 
@@ -146,9 +163,15 @@ class SizeSwitchClassifier(ClassifierMixin, BaseEstimator):
     def _batched(self, method: str, X):
         check_is_fitted(self, "estimator_")
         call = getattr(self.estimator_, method)
-        n_samples = _num_samples(X)
+        n_samples = _n_samples(X)
         if n_samples <= self.batch_size:
             return call(X)
+        if sp.issparse(X):
+            X = X.tocsr()  # rows sliced (a COO matrix has no slices)
+        elif hasattr(X, "iloc"):
+            X = X.iloc  # a DataFrame's rows by position
+        elif not hasattr(X, "__getitem__"):
+            X = np.asarray(X)  # an array-like with no slices of its own
         return np.concatenate(
             [
                 call(X[start : start + self.batch_size])

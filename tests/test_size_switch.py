@@ -192,3 +192,30 @@ def test_probabilities_of_the_default_through_calibration():
     model = CalibratedClassifierCV(make_graph_classifier(), cv=3).fit(graphs, y)
     proba = model.predict_proba([cycle(18), path(18)])
     assert proba.shape == (2, 2) and proba[0, 0] > 0.5 and proba[1, 1] > 0.5
+
+
+def test_batches_of_sparse_and_frame_inputs_and_bad_samples():
+    import pandas as pd
+    import scipy.sparse as sp
+
+    X, y = rows()
+    linear = SizeSwitchClassifier(LogisticRegression(), DecisionTreeClassifier(), batch_size=7)
+    linear.fit(X, y)
+    np.testing.assert_array_equal(linear.predict(sp.coo_matrix(X)), linear.estimator_.predict(X))
+    model = switch(max_small_samples=100, batch_size=7).fit(X, y)
+    expected = model.estimator_.predict(X)
+    frame = pd.DataFrame(X, columns=["a", "b", "c"], index=np.arange(40)[::-1])
+    frame_model = switch(max_small_samples=100, batch_size=7).fit(frame, y)
+    np.testing.assert_array_equal(frame_model.predict(frame), expected)
+    with pytest.raises(TypeError, match="a sequence or an array-like of samples, got generator"):
+        model.fit((row for row in X), y)
+    with pytest.raises(TypeError, match="got float"):
+        model.predict(3.0)
+
+
+def test_a_failed_refit_leaves_the_last_fit_whole():
+    X, y = rows()
+    model = switch(max_small_samples=100).fit(X, y)
+    with pytest.raises(ValueError):
+        model.set_params(max_small_samples=0).fit(X, y[:5])  # the tree refuses
+    assert model.chosen_ == "small" and isinstance(model.estimator_, KNeighborsClassifier)
