@@ -181,9 +181,7 @@ def make_graph_classifier(
         ("distances", GraphPairDistances(n_jobs=n_jobs)),
         (
             "classifier",
-            KernelSumSVC(
-                (0,) * (len(GRAPH_KINDS) * len(times)) + (1, 2), random_state=random_state
-            ),
+            KernelSumSVC("graph", random_state=random_state),
         ),
     ]
     diagrams = Pipeline(

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import data_folder
 from sklearn.base import clone
-from sklearn.model_selection import KFold, cross_val_score
+from sklearn.model_selection import GridSearchCV, KFold, cross_val_score
 from test_graph_learning import cycle, eigen, star
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
@@ -204,7 +204,7 @@ def test_kernel_classifier_of_graphs(graphs):
     X, y = graphs
     model = make_graph_classifier(classifier="kernels", times=(0.1, 10.0))
     assert list(model.named_steps) == ["eigen", "distances", "classifier"]
-    assert model.get_params()["classifier__groups"] == (0,) * 8 + (1, 2)
+    assert model.get_params()["classifier__groups"] == "graph"
     cv = KFold(4, shuffle=True, random_state=0)
     scores = cross_val_score(model, X, y, cv=cv)
     assert scores.mean() > 0.9
@@ -242,3 +242,26 @@ def test_mutag_kernel_accuracy_floor():
         for train, test in KFold(5, shuffle=True, random_state=0).split(stack)
     ]
     assert np.mean(scores) > 0.8
+
+
+def test_graph_groups_follow_the_number_of_signatures(graphs):
+    """groups="graph" is GraphPairDistances' layout at any number of times: the
+    diagrams in one group, the patterns and the features one each; a grid search over
+    the signatures' times works on the default (a fixed tuple of groups broke it)."""
+    X, y = graphs
+    stack = make_graph_classifier(classifier="kernels", times=(0.1, 10.0))[:-1].fit_transform(X)
+    named = KernelSumSVC("graph").fit(stack, y)
+    explicit = KernelSumSVC((0,) * 8 + (1, 2)).fit(stack, y)
+    assert named.cv_scores_ == explicit.cv_scores_
+    np.testing.assert_array_equal(named.decision_function(stack), explicit.decision_function(stack))
+    with pytest.raises(ValueError, match='groups="graph" needs at least 3 positions'):
+        KernelSumSVC("graph").fit(stack[:, :, :2], y)
+    with pytest.raises(ValueError, match="'groups' parameter of KernelSumSVC"):
+        KernelSumSVC("graphs").fit(stack, y)
+    search = GridSearchCV(
+        make_graph_classifier(),
+        {"eigen__times": [(0.1, 10.0), (0.1, 1.0, 10.0)]},
+        cv=KFold(3, shuffle=True, random_state=0),
+        error_score="raise",
+    ).fit(X, y)
+    assert search.best_params_["eigen__times"] in [(0.1, 10.0), (0.1, 1.0, 10.0)]

@@ -15,7 +15,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, check_random_state
 
 from .._base import median_scale
-from .._param_validation import Interval, check_params
+from .._param_validation import Interval, Options, check_params
 from ._base import BANDWIDTH
 
 __all__ = ["KernelSumSVC"]
@@ -41,8 +41,11 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
 
     Parameters
     ----------
-    groups : sequence of int or None, default=None
+    groups : sequence of int, "graph" or None, default=None
         The group of each position (``None``: each position is its own group).
+        ``"graph"``: the layout of :class:`GraphPairDistances`, every position but the
+        last two (the diagrams, however many signatures) in one group, the patterns and
+        the features in a group each; it follows a change of the signatures' times.
     bandwidth : float, default=1.0
         ``sigma`` of the positions' kernels, in units of their median distance.
     C : sequence of float, default=(1.0, 10.0, 100.0)
@@ -80,7 +83,7 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
     """
 
     _parameter_constraints = {
-        "groups": [tuple, list, np.ndarray, None],
+        "groups": [tuple, list, np.ndarray, Options(("graph",)), None],
         "bandwidth": BANDWIDTH,
         "C": [tuple, list],
         "cv": [Interval(Integral, 2, None, closed="left")],
@@ -139,6 +142,13 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
     def _groups(self, n_positions) -> np.ndarray:
         if self.groups is None:
             return np.arange(n_positions)
+        if isinstance(self.groups, str):
+            if n_positions < 3:
+                raise ValueError(
+                    f'groups="graph" needs at least 3 positions (diagrams, patterns, '
+                    f"features), the stack has {n_positions}"
+                )
+            return np.r_[np.zeros(n_positions - 2, dtype=np.intp), 1, 2]
         groups = np.asarray(self.groups)
         if groups.shape != (n_positions,) or not np.issubdtype(groups.dtype, np.integer):
             raise ValueError(f"groups must give an int to each of the {n_positions} positions")
