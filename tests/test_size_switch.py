@@ -219,3 +219,17 @@ def test_a_failed_refit_leaves_the_last_fit_whole():
     with pytest.raises(ValueError):
         model.set_params(max_small_samples=0).fit(X, y[:5])  # the tree refuses
     assert model.chosen_ == "small" and isinstance(model.estimator_, KNeighborsClassifier)
+
+
+def test_graph_classifier_default_same_under_any_backend():
+    """The kernel SVM's decisions do not depend on joblib's backend or job count (more
+    tasks than cores)."""
+    from joblib import parallel_backend
+
+    graphs = [f(n) for f in (cycle, path, star) for n in range(5, 13)]
+    y = np.repeat([0, 1, 2], 8)
+    reference = make_graph_classifier(n_jobs=1).fit(graphs, y).decision_function(graphs)
+    for backend in ("loky", "threading"):
+        with parallel_backend(backend):
+            model = make_graph_classifier(n_jobs=4).fit(graphs, y)
+            np.testing.assert_array_equal(model.decision_function(graphs), reference)
