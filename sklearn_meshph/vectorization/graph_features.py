@@ -15,6 +15,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer
 from .._param_validation import Interval
 from ..mesh.scalar_field import ScalarField
+from ..spectral.eigensolver import DENSE_LIMIT
 
 __all__ = ["GraphFeatures"]
 
@@ -45,9 +46,10 @@ _HARMONIC_RANGE = (0.05, 50.0)
 # graphs' pair histograms are over the pairs of this many of their nodes (a fixed
 # sample), the resistances refused.
 _MAX_PAIR_NODES = 4000
-# The harmonic distances' dense eigendecomposition of the whole graph (about three
-# n x n arrays: 2.4 GB at this size) bounds the pair histograms' graphs.
-_MAX_DENSE_NODES = 10000
+# The harmonic distances' dense eigendecomposition of the whole graph bounds the pair
+# histograms' graphs, as it bounds the eigen stage's every-eigenpair solve (about three
+# n x n arrays: 3.5 GB at 12,000 nodes).
+_MAX_DENSE_NODES = DENSE_LIMIT
 _ZERO = 1e-8
 # Decimals kept of the effective resistances: far above the eigensolver's rounding,
 # far below the gaps between the resistances of small rings.
@@ -274,9 +276,10 @@ class GraphFeatures(SampleTransformer):
     each cost a dense eigendecomposition of each graph (cubic in its nodes). In graphs
     of more than 4000 nodes the pair histograms count the pairs of 4000 of their nodes
     (a fixed sample: the same graph always gives the same features), the distances
-    still those of the whole graph, and graphs of more than 10,000 nodes are refused
-    (set ``pairs=False``); the resistance histogram refuses graphs of more than 4000
-    nodes (set ``n_resistance_bins=0``).
+    still those of the whole graph, and graphs of more than 12,000 nodes are refused
+    (set ``pairs=False``), as the eigen stage refuses every eigenpair of them; the
+    resistance histogram refuses graphs of more than 4000 nodes (set
+    ``n_resistance_bins=0``).
 
     Parameters
     ----------
