@@ -6,7 +6,7 @@ import os
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.utils.validation import validate_data
 
 from ._param_validation import check_params
@@ -161,3 +161,25 @@ class SampleTransformer(TransformerMixin, BaseEstimator):
         tags.input_tags.two_d_array = False
         tags.transformer_tags.preserves_dtype = []
         return tags
+
+
+class ClassifierScoreMixin(ClassifierMixin):
+    """scikit-learn's ``ClassifierMixin`` with a ``score`` documented for any samples
+    (sequences of meshes or graphs, stacks of distances, rows), whose docstring the
+    documentation can render (the inherited one cross-references a page it has not)."""
+
+    def score(self, X, y, sample_weight=None):
+        """The accuracy of :meth:`predict` on ``X`` against ``y`` (weighted by
+        ``sample_weight``; scikit-learn's ``accuracy_score``).
+
+        Parameters
+        ----------
+        X : the samples :meth:`predict` takes
+        y : array-like of shape (n_samples,)
+        sample_weight : array-like of shape (n_samples,), default=None
+
+        Returns
+        -------
+        float
+        """
+        return super().score(X, y, sample_weight=sample_weight)

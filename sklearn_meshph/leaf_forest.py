@@ -8,10 +8,11 @@ import warnings
 from numbers import Integral
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.base import BaseEstimator
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._base import ClassifierScoreMixin
 from ._param_validation import Interval, Options, check_params
 
 __all__ = ["LeafSizeForest"]
@@ -40,7 +41,7 @@ def _oob_accuracy(forest, y) -> float:
     return float(np.mean(predicted == y[voted]))
 
 
-class LeafSizeForest(ClassifierMixin, BaseEstimator):
+class LeafSizeForest(ClassifierScoreMixin, BaseEstimator):
     """Extremely randomized trees, with the leaf size their out-of-bag votes prefer.
 
     ``fit`` grows one forest of ``n_estimators`` bootstrapped extremely randomized

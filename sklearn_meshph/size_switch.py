@@ -10,11 +10,12 @@ from numbers import Integral
 
 import numpy as np
 import scipy.sparse as sp
-from sklearn.base import BaseEstimator, ClassifierMixin, clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.utils import get_tags
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted
 
+from ._base import ClassifierScoreMixin
 from ._param_validation import HasMethods, Interval, check_params
 
 __all__ = ["SizeSwitchClassifier"]
@@ -48,7 +49,7 @@ def _chosen_has(name: str):
     return check
 
 
-class SizeSwitchClassifier(ClassifierMixin, BaseEstimator):
+class SizeSwitchClassifier(ClassifierScoreMixin, BaseEstimator):
     """A clone of ``small`` fitted when there are at most ``max_small_samples`` training
     samples, of ``large`` otherwise.
 
@@ -191,22 +192,6 @@ class SizeSwitchClassifier(ClassifierMixin, BaseEstimator):
         ndarray of shape (n_samples,)
         """
         return self._batched("predict", X)
-
-    def score(self, X, y, sample_weight=None):
-        """Mean accuracy of :meth:`predict` on ``X`` against ``y`` (weighted by
-        ``sample_weight``).
-
-        Parameters
-        ----------
-        X : sequence or array-like of n_samples samples
-        y : array-like of shape (n_samples,)
-        sample_weight : array-like of shape (n_samples,), default=None
-
-        Returns
-        -------
-        float
-        """
-        return super().score(X, y, sample_weight=sample_weight)
 
     @available_if(_chosen_has("predict_proba"))
     def predict_proba(self, X):

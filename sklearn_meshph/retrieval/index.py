@@ -7,12 +7,12 @@ from numbers import Integral
 
 import numpy as np
 from numpy.lib.format import open_memmap
-from sklearn.base import BaseEstimator, ClassifierMixin, clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.pipeline import Pipeline, make_pipeline
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
-from .._base import as_sample_list
+from .._base import ClassifierScoreMixin, as_sample_list
 from .._param_validation import HasMethods, Interval, Options, check_params
 from ..combine import CombinedDistance
 from ..pipelines import make_mesh_distance
@@ -444,7 +444,7 @@ class ShapeNeighbors(_ShapeIndex):
         return self._fit_index(X)
 
 
-class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
+class ShapeNeighborsClassifier(ClassifierScoreMixin, _ShapeIndex):
     """Nearest-neighbour classification of shapes, exact and pruned
     (:class:`ShapeNeighbors`' index), like :class:`sklearn.neighbors.KNeighborsClassifier`.
 
@@ -519,21 +519,6 @@ class ShapeNeighborsClassifier(ClassifierMixin, _ShapeIndex):
         votes = self._codes[indices]
         counts = np.stack([np.sum(votes == c, axis=1) for c in range(len(self.classes_))], 1)
         return counts / indices.shape[1]
-
-    def score(self, X, y, sample_weight=None):
-        """The accuracy of :meth:`predict` on ``X`` (scikit-learn's ``accuracy_score``).
-
-        Parameters
-        ----------
-        X : sequence of samples
-        y : array-like of shape (n_samples,)
-        sample_weight : array-like of shape (n_samples,), default=None
-
-        Returns
-        -------
-        float
-        """
-        return super().score(X, y, sample_weight=sample_weight)
 
     def predict(self, X):
         """The class most neighbours of each sample belong to.

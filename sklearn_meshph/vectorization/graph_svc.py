@@ -8,13 +8,13 @@ import itertools
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.base import BaseEstimator
 from sklearn.model_selection import KFold
 from sklearn.svm import SVC
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, check_random_state
 
-from .._base import median_scale
+from .._base import ClassifierScoreMixin, median_scale
 from .._param_validation import Interval, Options, check_params
 from ._base import BANDWIDTH
 
@@ -24,7 +24,7 @@ __all__ = ["KernelSumSVC"]
 _KERNEL_BLOCK = 1 << 23
 
 
-class KernelSumSVC(ClassifierMixin, BaseEstimator):
+class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     """SVM on a sum of kernels of distances, the kernels summed and ``C`` chosen by
     cross-validation on the training samples.
 
@@ -251,8 +251,3 @@ class KernelSumSVC(ClassifierMixin, BaseEstimator):
         ndarray of shape (n_samples,)
         """
         return self.svc_.predict(self._kernel(X))
-
-    def score(self, X, y, sample_weight=None):
-        """Mean accuracy of ``predict(X)`` against ``y`` (weighted by ``sample_weight``),
-        ``X`` the distances to the training samples, as for :meth:`predict`."""
-        return super().score(X, y, sample_weight=sample_weight)
