@@ -41,6 +41,7 @@ from sklearn.pipeline import Pipeline
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
 from sklearn_meshph.size_switch import SizeSwitchClassifier
 
+# KernelSumSVC("graph")'s groups; "features" holds the nodes' discrepancy too.
 KERNELS = ("diagrams", "patterns", "features")
 PERSLAY = {
     "MUTAG": 89.8,

@@ -7,7 +7,8 @@ PersLay's protocol (10-fold shuffled cross-validation, seeds 0 to ``--repeats - 
 the stack of ``GraphPairDistances`` (computed once per dataset: a pair's distances
 depend on that pair alone). In each training fold the positions' kernels are
 ``exp(-d / (2 median))`` (the median over the training pairs), averaged into three
-groups (diagrams, Weisfeiler-Lehman patterns, features), as ``KernelSumSVC`` does; then
+groups (diagrams, Weisfeiler-Lehman patterns, the nodes' discrepancy with the features),
+as ``KernelSumSVC`` does; then
 an SVM with a precomputed kernel, its kernels and C given by one of the strategies:
 
 - ``choice``: every non-empty sum of the groups with C in 1, 10, 100 (21 candidates),
@@ -126,7 +127,9 @@ def main():
             raise SystemExit(f"{name}: the hinge loss and the averages here are for two classes")
         model = make_graph_classifier(classifier="kernels", n_jobs=args.n_jobs)
         stack = model[:-1].fit_transform(graphs)
-        groups = np.asarray(model[-1].groups)
+        # KernelSumSVC("graph")'s layout: the diagrams, the patterns, then the nodes'
+        # discrepancy and the features in one group.
+        groups = np.r_[np.zeros(stack.shape[2] - 3, dtype=int), 1, 2, 2]
         splits = [
             split
             for seed in range(args.repeats)

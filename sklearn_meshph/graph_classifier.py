@@ -96,11 +96,12 @@ def make_graph_classifier(
       - ``"distances"`` (:class:`GraphPairDistances`): the sliced Wasserstein distance
         of each of the four extended diagrams (:class:`LowerStarPersistence` with
         ``filtration="extended"``) of each signature, the Weisfeiler-Lehman patterns'
-        distance of the degrees, the distance of the features (below) log-scaled and
-        standardized on the training graphs;
-      - ``"classifier"`` (:class:`KernelSumSVC`): the diagrams' kernels averaged into
-        one, which kernels to sum and ``C`` chosen by internal cross-validation on the
+        distance of the degrees, the maximum mean discrepancy of the nodes' signatures,
+        the distance of the features (below) log-scaled and standardized on the
         training graphs;
+      - ``"classifier"`` (:class:`KernelSumSVC`): the diagrams' kernels averaged into
+        one, the nodes' and the features' into another, which of the three kernels to
+        sum and ``C`` chosen by internal cross-validation on the training graphs;
 
       and on more training graphs (where the distances between every pair, which grow
       as their square, would cost minutes to hours) its ``large`` pipeline, trees:
@@ -142,8 +143,8 @@ def make_graph_classifier(
         Parallel jobs of the eigen stage, persistence, the distances and the forest
         (joblib).
     random_state : int, RandomState or None, default=0
-        Seed of the SVM's internal folds, of the forest (and of the eigen stage's start
-        vector, which a dense solve does not use).
+        Seed of the SVM's internal folds, of the nodes' random Fourier features, of the
+        forest (and of the eigen stage's start vector, which a dense solve does not use).
     verbose : int, default=0
         Progress bars of the stages that have them.
 
@@ -178,7 +179,7 @@ def make_graph_classifier(
         tuple(times),
     )
     kernels = [
-        ("distances", GraphPairDistances(n_jobs=n_jobs)),
+        ("distances", GraphPairDistances(n_jobs=n_jobs, random_state=random_state)),
         (
             "classifier",
             KernelSumSVC("graph", random_state=random_state),

@@ -34,22 +34,80 @@ def test_pair_distances_of_a_fold_from_the_stack_of_all(graphs, features):
     X = fields(graphs[0])
     full = GraphPairDistances(features=features)
     stack = full.fit_transform(X)
-    assert stack.shape == (len(X), len(X), 4 * 2 + 2)  # 4 kinds x 2 times, patterns, features
+    # 4 kinds x 2 times, patterns, nodes, features
+    assert stack.shape == (len(X), len(X), 4 * 2 + 3)
     np.testing.assert_allclose(stack, stack.transpose(1, 0, 2), atol=1e-12)
     np.testing.assert_allclose(stack[np.arange(len(X)), np.arange(len(X))], 0.0, atol=1e-12)
     train = np.random.default_rng(0).permutation(len(X))[:10]
     test = np.setdiff1d(np.arange(len(X)), train)
     part = GraphPairDistances(features=features)
     fitted_stack = part.fit_transform([X[i] for i in train])
-    assert part.n_positions_ == 10 and part.n_features_in_ == 10
+    assert part.n_positions_ == 11 and part.n_features_in_ == 10
     np.testing.assert_allclose(full.fold_stack(stack, train, train), fitted_stack, atol=1e-10)
     tested = part.transform([X[i] for i in test])
     np.testing.assert_allclose(full.fold_stack(stack, test, train), tested, atol=1e-10)
-    # The diagrams and patterns depend on the pair alone; the Canberra distance too,
+    # The diagrams, patterns and nodes depend on the pair alone; the Canberra distance too,
     # the standardized features on the fitted graphs' statistics.
     np.testing.assert_allclose(tested[:, :, :-1], stack[np.ix_(test, train)][:, :, :-1])
     same = np.allclose(tested[:, :, -1], stack[np.ix_(test, train)][:, :, -1])
     assert same == (features == "canberra")
+
+
+def _exact_discrepancy(left, right, sigma):
+    """Squared maximum mean discrepancy of two sets of points under the Gaussian kernel,
+    by brute force over every pair."""
+    from scipy.spatial.distance import cdist
+
+    def mean_kernel(a, b):
+        return np.exp(-cdist(a, b, "sqeuclidean") / (2 * sigma**2)).mean()
+
+    return mean_kernel(left, left) + mean_kernel(right, right) - 2 * mean_kernel(left, right)
+
+
+def test_node_discrepancy_against_brute_force(graphs):
+    """The nodes' position estimates the exact squared maximum mean discrepancy of the
+    graphs' signatures (brute force over every pair of nodes), better with more random
+    features; it is a function of the pair alone, blind to the nodes' order, and the
+    same for the same seed."""
+    X = fields(graphs[0])
+    sigma = 0.05
+    values = [field.values.reshape(field.n_vertices, -1) for field in X]
+    exact = np.array([[_exact_discrepancy(a, b, sigma) for b in values] for a in values])
+    assert exact.max() > 0.1  # the graphs differ: a test that can fail
+    errors = []
+    for n_features in (64, 100_000):
+        stack = GraphPairDistances(node_bandwidth=sigma, n_random_features=n_features)
+        errors.append(np.abs(stack.fit_transform(X)[:, :, -2] - exact).max())
+    assert errors[1] < 0.02 < errors[0]
+    base = GraphPairDistances(node_bandwidth=sigma)
+    stack = base.fit_transform(X)[:, :, -2]
+    again = clone(base).fit_transform(X)[:, :, -2]
+    np.testing.assert_array_equal(stack, again)
+    other = clone(base).set_params(random_state=1).fit_transform(X)[:, :, -2]
+    assert not np.array_equal(stack, other)
+    assert max(np.abs(stack - exact).max(), np.abs(other - exact).max()) < 0.15
+    # Relabelled nodes: the same graph, the same distances to the fitted ones.
+    n, edges = graphs[0][3]
+    order = np.random.default_rng(2).permutation(n)
+    relabelled = fields([(n, order[edges])])
+    np.testing.assert_allclose(base.transform(relabelled)[0, :, -2], stack[3], atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        {"node_bandwidth": 0.0},
+        {"node_bandwidth": 1e-300},
+        {"node_bandwidth": np.inf},
+        {"node_bandwidth": np.nan},
+        {"n_random_features": 0},
+        {"random_state": "seed"},
+    ],
+)
+def test_node_discrepancy_parameters_refused(graphs, params):
+    X = fields(graphs[0][:4])
+    with pytest.raises(ValueError, match="GraphPairDistances"):
+        GraphPairDistances(**params).fit(X)
 
 
 def test_standardized_feature_distance_against_scikit_learn_scaler():
@@ -99,7 +157,7 @@ def test_pattern_distance_of_relabelled_and_different_graphs():
     stack = GraphPairDistances(wl_iterations=2).fit_transform(
         fields([cycle(7), relabelled, path(7), star(7)])
     )
-    patterns = stack[:, :, -2]
+    patterns = stack[:, :, -3]
     assert patterns[0, 1] == pytest.approx(0.0, abs=1e-12)  # the same graph
     assert patterns[0, 2] > 0 and patterns[0, 3] == pytest.approx(2.0)  # no degree shared
     assert 0 < patterns[0, 2] < 2  # a path's inner nodes look like a cycle's
@@ -251,11 +309,11 @@ def test_graph_groups_follow_the_number_of_signatures(graphs):
     X, y = graphs
     stack = make_graph_classifier(classifier="kernels", times=(0.1, 10.0))[:-1].fit_transform(X)
     named = KernelSumSVC("graph").fit(stack, y)
-    explicit = KernelSumSVC((0,) * 8 + (1, 2)).fit(stack, y)
+    explicit = KernelSumSVC((0,) * 8 + (1, 2, 2)).fit(stack, y)
     assert named.cv_scores_ == explicit.cv_scores_
     np.testing.assert_array_equal(named.decision_function(stack), explicit.decision_function(stack))
-    with pytest.raises(ValueError, match='groups="graph" needs at least 3 positions'):
-        KernelSumSVC("graph").fit(stack[:, :, :2], y)
+    with pytest.raises(ValueError, match='groups="graph" needs at least 4 positions'):
+        KernelSumSVC("graph").fit(stack[:, :, :3], y)
     with pytest.raises(ValueError, match="'groups' parameter of KernelSumSVC"):
         KernelSumSVC("graphs").fit(stack, y)
     search = GridSearchCV(

@@ -44,8 +44,9 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     groups : sequence of int, "graph" or None, default=None
         The group of each position (``None``: each position is its own group).
         ``"graph"``: the layout of :class:`GraphPairDistances`, every position but the
-        last two (the diagrams, however many signatures) in one group, the patterns and
-        the features in a group each; it follows a change of the signatures' times.
+        last three (the diagrams, however many signatures) in one group, the patterns
+        in a second, the nodes' discrepancy and the features in a third (their two
+        kernels averaged); it follows a change of the signatures' times.
     bandwidth : float, default=1.0
         ``sigma`` of the positions' kernels, in units of their median distance.
     C : sequence of float, default=(1.0, 10.0, 100.0)
@@ -143,12 +144,12 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         if self.groups is None:
             return np.arange(n_positions)
         if isinstance(self.groups, str):
-            if n_positions < 3:
+            if n_positions < 4:
                 raise ValueError(
-                    f'groups="graph" needs at least 3 positions (diagrams, patterns, '
-                    f"features), the stack has {n_positions}"
+                    f'groups="graph" needs at least 4 positions (diagrams, patterns, '
+                    f"nodes, features), the stack has {n_positions}"
                 )
-            return np.r_[np.zeros(n_positions - 2, dtype=np.intp), 1, 2]
+            return np.r_[np.zeros(n_positions - 3, dtype=np.intp), 1, 2, 2]
         groups = np.asarray(self.groups)
         if groups.shape != (n_positions,) or not np.issubdtype(groups.dtype, np.integer):
             raise ValueError(f"groups must give an int to each of the {n_positions} positions")
