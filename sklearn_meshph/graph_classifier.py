@@ -36,8 +36,8 @@ _TREES = 300
 # Weisfeiler-Lehman iterations of the trees' GraphFeatures.
 _WL_ITERATIONS = 3
 # The largest training set of the kernel SVM (classifier="auto"): its distances grow as
-# the square of the training graphs (2,000 graphs: 2 million pairs, a 0.45 GB stack,
-# about 1.5 minutes on 2 cores for graphs of 400 nodes); the trees above
+# the square of the training graphs (2,000 graphs: 2 million pairs, a 0.4 GB stack,
+# about 2 minutes on 2 cores for graphs of 400 nodes); the trees above
 # (docs/graphs.md, benchmarks/bench_graph_classifier_cost.py).
 _KERNEL_SAMPLES = 2000
 

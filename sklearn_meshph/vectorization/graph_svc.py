@@ -158,7 +158,7 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     def _kernels(self, X) -> np.ndarray:
         """The ``(n, m, n_groups)`` kernels of the groups (one pass over the stack, a
         block of rows at a time: the exponentials of all the positions at once would be
-        another copy of the stack, 1.5 GB for 3,700 graphs and 14 positions)."""
+        another copy of the stack, 1.6 GB for 3,700 graphs and 15 positions)."""
         average = np.zeros((len(self.group_of_), self.n_groups_))
         average[np.arange(len(self.group_of_)), self.group_of_] = 1.0
         average /= np.bincount(self.group_of_)
