@@ -149,7 +149,8 @@ class GraphPairDistances(SampleTransformer):
         distance depends on that pair alone.
     n_random_features : int, default=1024
         Random Fourier features of the discrepancy (the estimate's correlation with
-        the exact discrepancy was 0.9995 on MUTAG and COX2 with 1,024).
+        the exact discrepancy was 0.9995 on MUTAG and COX2 with 1,024). Each fitted
+        graph keeps this many floats (``embeddings_``: 8 MB per 1,000 graphs at 1,024).
     features : {"standardized", "canberra"}, default="standardized"
         The features' distance (above). Under PersLay's protocol the standardized
         features' kernel gave PROTEINS 75.7 against 74.6 with the Canberra distance and
@@ -216,7 +217,8 @@ class GraphPairDistances(SampleTransformer):
         self.random_state = random_state
 
     def _describe(self, X, fitting: bool):
-        """Diagrams, features and pattern counts of the graph fields ``X``."""
+        """Diagrams, features, and the pattern counts and nodes' mean random features,
+        of the graph fields ``X``."""
         if fitting:
             self.graph_ = GraphFeatures().fit(X)
             self.persistence_ = LowerStarPersistence(filtration="extended", n_jobs=self.n_jobs)
