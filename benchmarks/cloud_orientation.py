@@ -15,6 +15,9 @@ cloud's points two global orientations get right, against the mesh's outward nor
   with all the neighbour pairs at once (a relaxation of the smallest frustration),
   rather than along one tree.
 
+``--graph operator`` orients over the edges of our cloud operator's fans (the
+neighbours its sheet tests keep) instead of the ``--neighbours`` nearest.
+
 Each Sumner mesh is sampled uniformly (``trimesh.sample.sample_surface``, seed 0; the
 true normal of a point is its face's), optionally with Gaussian noise of ``--noise``
 times the bounding box's diagonal; the normals are the principal axes of the
@@ -36,6 +39,8 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.sparse.linalg import eigsh
 from scipy.spatial import cKDTree
 
+from sklearn_meshph.pointcloud.laplacians import point_cloud_laplacian
+
 
 def principal_normals(points, k):
     """Unoriented normals: the least principal axis of each point's ``k`` nearest."""
@@ -46,18 +51,26 @@ def principal_normals(points, k):
     return axes[:, :, 0], tree
 
 
-def neighbour_pairs(points, normals, tree, k):
-    """The directed k-nearest-neighbour pairs and their normals' dot products."""
+def neighbour_pairs(points, tree, k, graph):
+    """The pairs of neighbours ``(rows, cols)``: each point's ``k`` nearest, or the
+    edges of our cloud operator's fans (``point_cloud_laplacian``'s stiffness)."""
+    if graph == "operator":
+        stiffness = sp.triu(point_cloud_laplacian(points)[0], 1).tocoo()
+        keep = stiffness.data != 0
+        return stiffness.row[keep], stiffness.col[keep]
     _, nearest = tree.query(points, k + 1)
-    rows = np.repeat(np.arange(len(points)), k)
-    cols = nearest[:, 1:].ravel()
-    return rows, cols, np.einsum("ij,ij->i", normals[rows], normals[cols])
+    return np.repeat(np.arange(len(points)), k), nearest[:, 1:].ravel()
 
 
-def mst_signs(points, normals, tree, k):
-    rows, cols, dots = neighbour_pairs(points, normals, tree, k)
-    n = len(points)
-    weights = sp.csr_matrix((1.0 - np.abs(dots) + 1e-9, (rows, cols)), shape=(n, n))
+def _dots(pairs, normals):
+    rows, cols = pairs
+    return np.einsum("ij,ij->i", normals[rows], normals[cols])
+
+
+def mst_signs(pairs, normals):
+    rows, cols = pairs
+    n = len(normals)
+    weights = sp.csr_matrix((1.0 - np.abs(_dots(pairs, normals)) + 1e-9, (rows, cols)), (n, n))
     tree_graph = minimum_spanning_tree(weights.maximum(weights.T))
     tree_graph = tree_graph + tree_graph.T
     signs = np.zeros(n)
@@ -72,10 +85,10 @@ def mst_signs(points, normals, tree, k):
     return signs
 
 
-def spectral_signs(points, normals, tree, k):
-    rows, cols, dots = neighbour_pairs(points, normals, tree, k)
-    n = len(points)
-    signed = sp.csr_matrix((dots, (rows, cols)), shape=(n, n))
+def spectral_signs(pairs, normals):
+    rows, cols = pairs
+    n = len(normals)
+    signed = sp.csr_matrix((_dots(pairs, normals), (rows, cols)), shape=(n, n))
     signed = (signed + signed.T) / 2
     degree = np.asarray(abs(signed).sum(axis=1)).ravel()
     scale = sp.diags(1.0 / np.sqrt(np.maximum(degree, 1e-12)))
@@ -83,12 +96,12 @@ def spectral_signs(points, normals, tree, k):
     return np.where(vector[:, 0] >= 0, 1.0, -1.0)
 
 
-def disagreement(signs, points, normals, tree, k):
-    """The sum of ``|n_i . n_j|`` over the neighbour pairs whose oriented normals point
-    apart: what both methods make small."""
-    rows, cols, dots = neighbour_pairs(points, normals, tree, k)
-    apart = signs[rows] * signs[cols] * dots < 0
-    return float(np.abs(dots)[apart].sum())
+def disagreement(signs, pairs, normals):
+    """The sum of ``|n_i . n_j|`` over the pairs whose oriented normals point apart:
+    what both methods make small."""
+    rows, cols = pairs
+    dots = _dots(pairs, normals)
+    return float(np.abs(dots)[signs[rows] * signs[cols] * dots < 0].sum())
 
 
 def share_right(signs, normals, truth):
@@ -104,6 +117,12 @@ def main():
     parser.add_argument("--points", type=int, default=3000)
     parser.add_argument("--noise", type=float, default=0.0)
     parser.add_argument("--neighbours", type=int, default=10)
+    parser.add_argument(
+        "--graph",
+        choices=("knn", "operator"),
+        default="knn",
+        help="the pairs oriented: the --neighbours nearest, or our operator's fan edges",
+    )
     parser.add_argument("--data", default=str(DATA / "sumner"), help="the Sumner folder")
     args = parser.parse_args()
     start = time.perf_counter()
@@ -116,17 +135,19 @@ def main():
             points = points + np.random.default_rng(0).normal(scale=scale, size=points.shape)
         normals, tree = principal_normals(points, args.neighbours)
         truth = mesh.face_normals[faces]
-        signs = [method(points, normals, tree, args.neighbours) for method in METHODS]
+        pairs = neighbour_pairs(points, tree, args.neighbours, args.graph)
+        signs = [method(pairs, normals) for method in METHODS]
         shares.setdefault(path.parent.name, []).append(
             [share_right(s, normals, truth) for s in signs]
         )
         true_signs = np.where(np.einsum("ij,ij->i", normals, truth) >= 0, 1.0, -1.0)
-        disagreements.append(
-            [disagreement(s, points, normals, tree, args.neighbours) for s in [true_signs, *signs]]
-        )
+        disagreements.append([disagreement(s, pairs, normals) for s in [true_signs, *signs]])
     if not shares:
         raise SystemExit(f"no Sumner meshes under {args.data}")
-    print(f"{args.points} points, noise {args.noise}, {args.neighbours} neighbours")
+    print(
+        f"{args.points} points, noise {args.noise}, normals of {args.neighbours} "
+        f"neighbours, pairs: {args.graph}"
+    )
     print("| class | mst: mean | mst: worst | spectral: mean | spectral: worst |")
     print("|---|---|---|---|---|")
     for name, rows in shares.items():
