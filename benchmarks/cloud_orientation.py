@@ -125,6 +125,10 @@ def main():
     )
     parser.add_argument("--data", default=str(DATA / "sumner"), help="the Sumner folder")
     args = parser.parse_args()
+    if not 3 <= args.neighbours < args.points:
+        parser.error("--neighbours must be at least 3 and fewer than --points")
+    if not 0 <= args.noise < float("inf"):
+        parser.error("--noise must be finite and at least 0")
     start = time.perf_counter()
     shares, disagreements = {}, []
     for path in sorted(Path(args.data).glob("[!_]*/*.obj")):

@@ -44,6 +44,15 @@ from sklearn_meshph import load_tu_dataset, make_graph_classifier
 from sklearn_meshph.vectorization import KernelSumSVC
 
 N_FEATURES = 512
+ROWS = (
+    "default",
+    "+ diagrams' discrepancy",
+    "edges' discrepancy for the nodes'",
+    "+ edges' discrepancy (features' group)",
+    "alone: nodes' discrepancy",
+    "alone: diagrams' discrepancy",
+    "alone: edges' discrepancy",
+)
 
 
 def _fourier(dim, width, seed):
@@ -155,6 +164,9 @@ def main():
     parser.add_argument("--rows", nargs="+", help="the rows to run (start of their names)")
     parser.add_argument("--data", default=str(DATA / "tu"), help="folder of the TU datasets")
     args = parser.parse_args()
+    unknown = [start for start in args.rows or () if not any(r.startswith(start) for r in ROWS)]
+    if unknown:
+        parser.error(f"--rows {unknown}: no such row; the rows are {list(ROWS)}")
     table = {}
     for name in args.datasets:
         start = time.perf_counter()
@@ -162,6 +174,7 @@ def main():
         y = np.asarray(y)
         model = make_graph_classifier(classifier="kernels", n_jobs=args.n_jobs)
         distances, stack, rows = rows_for(model, graphs)
+        assert tuple(rows) == ROWS
         splits = [
             split
             for seed in range(args.repeats)
