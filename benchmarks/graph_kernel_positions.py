@@ -164,6 +164,8 @@ def main():
     parser.add_argument("--rows", nargs="+", help="the rows to run (start of their names)")
     parser.add_argument("--data", default=str(DATA / "tu"), help="folder of the TU datasets")
     args = parser.parse_args()
+    if args.repeats < 1:
+        parser.error("--repeats must be at least 1")
     unknown = [start for start in args.rows or () if not any(r.startswith(start) for r in ROWS)]
     if unknown:
         parser.error(f"--rows {unknown}: no such row; the rows are {list(ROWS)}")
