@@ -42,6 +42,7 @@ from sklearn.model_selection import KFold
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
 from sklearn_meshph.vectorization import KernelSumSVC
+from sklearn_meshph.vectorization.graph_pairs import _mean_embedding
 
 N_FEATURES = 512
 ROWS = (
@@ -63,10 +64,12 @@ def _fourier(dim, width, seed):
 
 
 def _embedding(points, projection, phases, mean):
+    """The points' mean random Fourier features (``GraphPairDistances``' own), or their
+    sum."""
     if len(points) == 0:
-        return np.zeros(N_FEATURES)
-    features = np.sqrt(2.0 / N_FEATURES) * np.cos(points @ projection + phases)
-    return features.mean(axis=0) if mean else features.sum(axis=0)
+        return np.zeros(projection.shape[1])
+    embedding = _mean_embedding(points, projection, phases)
+    return embedding if mean else embedding * len(points)
 
 
 def _squared_distances(embeddings):

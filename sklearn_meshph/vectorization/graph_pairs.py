@@ -236,7 +236,7 @@ class GraphPairDistances(SampleTransformer):
         embeddings = np.array(
             [_mean_embedding(_node_values(f), self.projection_, self.phases_) for f in X]
         )
-        return diagrams, features, (patterns, embeddings)
+        return diagrams, features, patterns, embeddings
 
     def _standardize(self, fitted: np.ndarray) -> None:
         """Learn the log-scaled features' means and scales on the ``fitted`` rows."""
@@ -247,8 +247,7 @@ class GraphPairDistances(SampleTransformer):
             return np.nan_to_num(cdist(features, fitted, "canberra"))
         return _standardized_distances(features, fitted, self.features_mean_, self.features_scale_)
 
-    def _stack(self, sliced, features, nodes):
-        patterns, embeddings = nodes
+    def _stack(self, sliced, features, patterns, embeddings):
         parts = [
             sliced,
             _pattern_distances(patterns, self.patterns_),
@@ -319,8 +318,7 @@ class GraphPairDistances(SampleTransformer):
     def _fit(self, X):
         self._check_params()
         X = GraphFeatures()._fields(X)
-        diagrams, self.features_, nodes = self._describe(X, fitting=True)
-        self.patterns_, self.embeddings_ = nodes
+        diagrams, self.features_, self.patterns_, self.embeddings_ = self._describe(X, fitting=True)
         if self.features == "standardized":
             self._standardize(self.features_)
         self.sliced_ = PerDiagramDistance(n_directions=self.n_directions, n_jobs=self.n_jobs)
@@ -340,7 +338,7 @@ class GraphPairDistances(SampleTransformer):
         """
         diagrams = self._fit(X)
         sliced = self._fitted(self.sliced_.fit_transform(diagrams))
-        return self._stack(sliced, self.features_, (self.patterns_, self.embeddings_))
+        return self._stack(sliced, self.features_, self.patterns_, self.embeddings_)
 
     def transform(self, X):
         """The distances of each graph of ``X`` to each fitted graph.
@@ -356,5 +354,5 @@ class GraphPairDistances(SampleTransformer):
         """
         check_is_fitted(self, "n_positions_")
         X = self.graph_._fields(X, self.graph_.n_functions_)
-        diagrams, features, nodes = self._describe(X, fitting=False)
-        return self._stack(self.sliced_.transform(diagrams), features, nodes)
+        diagrams, features, patterns, embeddings = self._describe(X, fitting=False)
+        return self._stack(self.sliced_.transform(diagrams), features, patterns, embeddings)
