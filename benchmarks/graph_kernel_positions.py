@@ -21,6 +21,13 @@ training folds, exactly as in the default. The rows:
   as the nodes'; a graph without edges its nodes as loops) in the nodes' place;
 - ``+ edges' discrepancy (features' group)``: the same beside the nodes' discrepancy
   and the features;
+- ``+ degree's diagrams``, ``+ eccentricity's diagrams``, ``+ closeness's diagrams``,
+  ``+ curvature's diagrams``: the four extended diagrams of another function on the
+  nodes than the signatures (the degree; the eccentricity over the graph's largest;
+  the closeness centrality within the node's component; the mean over the node's
+  edges of their Forman curvature ``4 - deg(u) - deg(v)``; 0 on isolated nodes), their
+  sliced Wasserstein distances (10 directions, as the signatures') averaged into the
+  diagrams' group;
 - ``alone: ...``: one distance, only C chosen (1, 10, 100): the nodes' discrepancy of
   the default, the diagrams' discrepancies above (averaged), the edges'.
 
@@ -31,16 +38,21 @@ beside (the anchor).
 """
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
+import scipy.sparse as sp
 from _common import DATA
 from graph_classification import PERSLAY
 from joblib import Parallel, delayed
+from scipy.sparse.csgraph import connected_components, shortest_path
 from scipy.spatial.distance import cdist
 from sklearn.model_selection import KFold
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
+from sklearn_meshph.diagrams.per_diagram import PerDiagramDistance
+from sklearn_meshph.persistence import LowerStarPersistence
 from sklearn_meshph.vectorization import KernelSumSVC
 from sklearn_meshph.vectorization.graph_pairs import _mean_embedding
 
@@ -50,6 +62,10 @@ ROWS = (
     "+ diagrams' discrepancy",
     "edges' discrepancy for the nodes'",
     "+ edges' discrepancy (features' group)",
+    "+ degree's diagrams",
+    "+ eccentricity's diagrams",
+    "+ closeness's diagrams",
+    "+ curvature's diagrams",
     "alone: nodes' discrepancy",
     "alone: diagrams' discrepancy",
     "alone: edges' discrepancy",
@@ -107,6 +123,41 @@ def edge_discrepancy(fields, width=0.03, seed=0):
     return _squared_distances(np.array(embeddings))
 
 
+FUNCTIONS = ("degree", "eccentricity", "closeness", "curvature")
+
+
+def node_functions(field):
+    """``(n_nodes, 4)``: the ``FUNCTIONS`` of a graph's nodes, from its edges alone."""
+    n, edges = field.n_vertices, np.asarray(field.edges)
+    ends = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
+    adjacency = sp.csr_matrix((np.ones(len(ends[0])), ends), shape=(n, n))
+    degree = np.bincount(ends[0], minlength=n).astype(np.float64)
+    hops = shortest_path(adjacency, unweighted=True)
+    hops[~np.isfinite(hops)] = 0.0  # other components
+    _, component = connected_components(adjacency, directed=False)
+    size = np.bincount(component)[component]
+    eccentricity = hops.max(axis=1)
+    closeness = (size - 1) / np.maximum(hops.sum(axis=1), 1.0)
+    curvature = np.zeros(n)
+    edge_curvature = 4.0 - degree[edges[:, 0]] - degree[edges[:, 1]]
+    np.add.at(curvature, edges[:, 0], edge_curvature)
+    np.add.at(curvature, edges[:, 1], edge_curvature)
+    curvature /= np.maximum(degree, 1.0)
+    return np.column_stack(
+        [degree, eccentricity / max(eccentricity.max(), 1.0), closeness, curvature]
+    )
+
+
+def function_distances(fields, n_jobs):
+    """``(n, n, 4 * 4)``: the sliced Wasserstein distances of the extended diagrams of
+    each of ``FUNCTIONS``, four diagrams per function in that order."""
+    other = [
+        dataclasses.replace(f, values=node_functions(f), column_names=FUNCTIONS) for f in fields
+    ]
+    diagrams = LowerStarPersistence(filtration="extended", n_jobs=n_jobs).fit_transform(other)
+    return PerDiagramDistance(n_directions=10, n_jobs=n_jobs).fit_transform(diagrams)
+
+
 def fold(distances, stack, extra, groups, y, train, test):
     """Test accuracy of ``KernelSumSVC(groups)`` on the default's positions (sliced and
     standardized per fold), with ``extra`` positions put first (``keep`` the default's
@@ -126,7 +177,7 @@ def fold(distances, stack, extra, groups, y, train, test):
     return np.mean(model.predict(block(test)) == y[test])
 
 
-def rows_for(model, graphs):
+def rows_for(model, graphs, n_jobs):
     """The screened rows: name -> (extra positions, default positions kept, groups)."""
     eigen, distances = model[0], model[1]
     fields = eigen.fit_transform(graphs)
@@ -138,6 +189,9 @@ def rows_for(model, graphs):
     k = per_diagram.shape[2]
     edges = edge_discrepancy(fields)[:, :, None]
     others = tuple(i for i in range(n) if i != nodes)
+    functions = function_distances(fields, n_jobs)
+    per_function = functions.shape[2] // len(FUNCTIONS)
+    with_function = tuple([0] * (per_function + n - 3) + [1, 2, 2])
     rows = {
         "default": ((None, None), "graph"),
         "+ diagrams' discrepancy": (
@@ -152,6 +206,13 @@ def rows_for(model, graphs):
             (edges, None),
             tuple([2] + [0] * (n - 3) + [1, 2, 2]),
         ),
+        **{
+            f"+ {name}'s diagrams": (
+                (functions[:, :, i * per_function : (i + 1) * per_function], None),
+                with_function,
+            )
+            for i, name in enumerate(FUNCTIONS)
+        },
         "alone: nodes' discrepancy": ((None, (nodes,)), (0,)),
         "alone: diagrams' discrepancy": ((per_diagram, ()), tuple([0] * k)),
         "alone: edges' discrepancy": ((edges, ()), (0,)),
@@ -178,7 +239,7 @@ def main():
         graphs, y = load_tu_dataset(f"{args.data}/{name}")
         y = np.asarray(y)
         model = make_graph_classifier(classifier="kernels", n_jobs=args.n_jobs)
-        distances, stack, rows = rows_for(model, graphs)
+        distances, stack, rows = rows_for(model, graphs, args.n_jobs)
         assert tuple(rows) == ROWS
         splits = [
             split
