@@ -22,6 +22,7 @@ from .vectorization import (
     GraphPairDistances,
     KernelSumSVC,
 )
+from .vectorization.graph_pairs import GRAPH_MIN_PERSISTENCE
 
 __all__ = ["GRAPH_KINDS", "GRAPH_TIMES", "graph_eigen", "make_graph_classifier"]
 
@@ -189,7 +190,12 @@ def make_graph_classifier(
         [
             (
                 "persistence",
-                LowerStarPersistence(filtration="extended", n_jobs=n_jobs, verbose=verbose),
+                LowerStarPersistence(
+                    filtration="extended",
+                    min_persistence=GRAPH_MIN_PERSISTENCE,
+                    n_jobs=n_jobs,
+                    verbose=verbose,
+                ),
             ),
             ("statistics", DiagramStatistics(n_jobs=n_jobs)),
         ]

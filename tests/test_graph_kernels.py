@@ -102,6 +102,9 @@ def test_node_discrepancy_against_brute_force(graphs):
         {"node_bandwidth": np.nan},
         {"n_random_features": 0},
         {"random_state": "seed"},
+        {"n_directions": 10**9},  # once 22 GB and the kernel's OOM killer
+        {"min_persistence": -1.0},
+        {"min_persistence": np.nan},
     ],
 )
 def test_node_discrepancy_parameters_refused(graphs, params):
@@ -236,10 +239,22 @@ def test_kernel_sum_refuses_bad_parameters():
     stack, y = separable_stack()
     with pytest.raises(ValueError, match="groups must give an int to each of the 2"):
         KernelSumSVC(groups=[0]).fit(stack, y)
-    with pytest.raises(ValueError, match="C must be a non-empty sequence"):
-        KernelSumSVC(C=(1.0, 0.0)).fit(stack, y)
+    for bad in ((1.0, 0.0), (np.nan,), (np.inf,)):
+        with pytest.raises(ValueError, match="KernelSumSVC|C must be a non-empty sequence"):
+            KernelSumSVC(C=bad).fit(stack, y)
     with pytest.raises(ValueError, match="1 training sample: .* needs at least 2"):
         KernelSumSVC().fit(stack[:1, :1], y[:1])
+
+
+def test_kernel_sum_refuses_more_groups_than_it_can_cross_validate():
+    """Every non-empty sum of groups is a candidate: a 15-position stack with a group
+    per position (the default groups=None) would be 32,767 sums, a fit of hours."""
+    stack, y = separable_stack()
+    wide = np.repeat(stack[:, :, :1], 15, axis=2)
+    with pytest.raises(ValueError, match="15 groups of positions: their 32767 sums"):
+        KernelSumSVC().fit(wide, y)
+    model = KernelSumSVC(groups=[0] * 7 + [1] * 8).fit(wide, y)  # grouped: 3 sums
+    assert model.n_groups_ == 2
 
 
 def test_kernel_sum_on_fewer_samples_than_folds_leaves_one_out():

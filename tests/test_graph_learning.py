@@ -374,3 +374,51 @@ def test_graph_features_refuse_bad_resistance_bins(params):
     name = next(iter(params))
     with pytest.raises(ValueError, match=f"'{name}' parameter of GraphFeatures"):
         GraphFeatures(**{"n_resistance_bins": 5, **params}).fit(fields)
+
+
+def petersen():
+    outer = [[i, (i + 1) % 5] for i in range(5)]
+    spokes = [[i, i + 5] for i in range(5)]
+    inner = [[5 + i, 5 + (i + 2) % 5] for i in range(5)]
+    return 10, np.array(outer + spokes + inner)
+
+
+def cube():
+    return 8, np.array([[i, i ^ bit] for i in range(8) for bit in (1, 2, 4) if i < i ^ bit])
+
+
+def symmetric_graphs():
+    """Graphs whose nodes' signatures are equal up to rounding (vertex-transitive or
+    nearly), where the order of the nodes decides the rounding; and two molecules'
+    shapes (rings with symmetric branches)."""
+    ring_with_arms = (8, np.array([[i, (i + 1) % 6] for i in range(6)] + [[0, 6], [3, 7]]))
+    return [cycle(6), cycle(9), star(7), complete(5), petersen(), cube(), ring_with_arms]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_graph_classifier_ignores_the_order_of_the_nodes(seed):
+    """The same graph with its nodes renumbered gets the same features and the same
+    stack of distances (the signatures of symmetric nodes differ by rounding, which
+    once decided which diagram points of length ~1e-16 existed, and on which side of
+    a spectrum bin's edge an eigenvalue such as 1.5 fell)."""
+    rng = np.random.default_rng(seed)
+    samples = symmetric_graphs()
+    renumbered = []
+    for n, edges in samples:
+        order = rng.permutation(n)
+        renumbered.append((n, order[edges]))
+    y = np.arange(len(samples)) % 2
+    trees = make_graph_classifier(classifier="trees", n_estimators=5, n_jobs=1)
+    features = trees[:-1].fit(samples, y)
+    np.testing.assert_allclose(
+        features.transform(renumbered), features.transform(samples), rtol=1e-9, atol=1e-9
+    )
+    kernels = make_graph_classifier(classifier="kernels", n_jobs=1)
+    fields, distances = kernels[0], kernels[1]
+    distances.fit(fields.fit_transform(samples))
+    np.testing.assert_allclose(
+        distances.transform(fields.transform(renumbered)),
+        distances.transform(fields.transform(samples)),
+        rtol=1e-9,
+        atol=1e-9,
+    )

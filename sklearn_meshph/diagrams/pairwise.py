@@ -18,7 +18,7 @@ from .._param_validation import Interval, Options, validate_params
 from .._progress import broadcast, parallel, track
 from ._assignment import precedes
 from ._batch import SLICED, pack, pack_sliced, pair_distances
-from .distances import METRICS, kernel_metric
+from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .estimator import DiagramTransformer
 from .validation import Packed, pack_samples
 
@@ -218,7 +218,7 @@ def _block(function, left, right, start, stop, n_cols, first):
         "internal_p": [Interval(Real, 1, None, closed="left")],
         "n_jobs": [Integral, None],
         "verbose": [Interval(Integral, 0, None, closed="left")],
-        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
         "per_diagram": ["boolean"],
     }
 )

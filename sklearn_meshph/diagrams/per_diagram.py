@@ -14,7 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._base import SampleTransformer, as_sample_list
 from .._param_validation import HasMethods, Interval, Options
 from .._version import VERSION
-from .distances import METRICS, kernel_metric
+from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .estimator import DiagramTransformer
 from .pairwise import as_packed, distance_stack
 from .stack_cache import StackCache, stack_cache_of
@@ -116,7 +116,7 @@ class PerDiagramDistance(DiagramTransformer):
         "metric": [Options(METRICS)],
         "order": [Interval(Real, 1, None, closed="left")],
         "internal_p": [Interval(Real, 1, None, closed="left")],
-        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
         "n_jobs": [Integral, None],
         "dtype": [Options(("float64", "float32"))],

@@ -10,7 +10,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list, median_scale
 from .._param_validation import Interval, Options
-from .distances import METRICS, kernel_metric
+from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .pairwise import PairwiseTransformer, distance_requests, run_plans
 from .validation import check_samples
 
@@ -126,7 +126,7 @@ class DiagramDistance(PairwiseTransformer):
         "dtype": [Options(("float64", "float32"))],
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "normalization": [Options(("none", "median"))],
-        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
     }
 
     def __init__(

@@ -93,7 +93,11 @@ def _size(adjacency) -> np.ndarray:
 
 
 def _spectrum(spectrum: np.ndarray, n_bins: int) -> np.ndarray:
-    counts = np.histogram(np.clip(spectrum, 0.0, 2.0), np.linspace(0.0, 2.0, n_bins + 1))[0]
+    # Rounded as the resistances are: eigenvalues such as 0.5, 1 and 1.5 fall on the
+    # bins' edges, where rounding of the eigensolver (which follows the nodes' order)
+    # would decide the bin.
+    binned = np.clip(np.round(spectrum, _DECIMALS), 0.0, 2.0)
+    counts = np.histogram(binned, np.linspace(0.0, 2.0, n_bins + 1))[0]
     positive = spectrum[spectrum > _ZERO]
     return np.r_[
         counts,

@@ -22,6 +22,9 @@ __all__ = ["KernelSumSVC"]
 
 #: Elements of the stack whose exponentials are taken at once (64 MB of float64).
 _KERNEL_BLOCK = 1 << 23
+# Groups of positions at most: every non-empty sum of them is a candidate (2**8 - 1 =
+# 255 sums, each cross-validated for every C).
+MAX_GROUPS = 8
 
 
 class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
@@ -42,7 +45,9 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     Parameters
     ----------
     groups : sequence of int, "graph" or None, default=None
-        The group of each position (``None``: each position is its own group).
+        The group of each position (``None``: each position is its own group). Every
+        non-empty sum of groups is a candidate, so at most ``MAX_GROUPS`` (8: 255
+        sums) groups are allowed; a stack with more positions needs ``groups``.
         ``"graph"``: the layout of :class:`GraphPairDistances`, every position but the
         last three (the diagrams, however many signatures) in one group, the patterns
         in a second, the nodes' discrepancy and the features in a third (their two
@@ -185,8 +190,11 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         self
         """
         check_params(self._parameter_constraints, self.get_params(deep=False), "KernelSumSVC")
-        if not self.C or any(not isinstance(c, Real) or c <= 0 for c in self.C):
-            raise ValueError(f"C must be a non-empty sequence of positive numbers, got {self.C}")
+        # not (c > 0) also refuses NaN, which SVC would report as its own C's fault
+        if not self.C or any(not isinstance(c, Real) or not (0 < c < np.inf) for c in self.C):
+            raise ValueError(
+                f"C must be a non-empty sequence of positive finite numbers, got {self.C}"
+            )
         X = self._stack(X)
         y = np.asarray(y)
         check_classification_targets(y)
@@ -198,6 +206,12 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
             )
         self.group_of_ = self._groups(X.shape[2])
         self.n_groups_ = self.group_of_.max() + 1
+        if self.n_groups_ > MAX_GROUPS:
+            raise ValueError(
+                f"{self.n_groups_} groups of positions: their {2**self.n_groups_ - 1} "
+                f"sums would each be cross-validated; at most {MAX_GROUPS} groups are "
+                'allowed. Pass groups (groups="graph" for a GraphPairDistances stack)'
+            )
         self.scales_ = np.array([median_scale(X[:, :, k]) for k in range(X.shape[2])])
         kernels = self._kernels(X)
         rng = check_random_state(self.random_state)

@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from .._param_validation import Interval, Options
+from ..diagrams.distances import MAX_DIRECTIONS
 from ..diagrams.pairwise import (
     SLICED,
     PairwiseTransformer,
@@ -219,7 +220,7 @@ class SlicedWassersteinKernel(_DiagramKernel):
 
     _parameter_constraints: dict = {
         **_KERNEL_CONSTRAINTS,
-        "n_directions": [Interval(Integral, 1, None, closed="left")],
+        "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
     }
 
     _natural = "product"
