@@ -422,3 +422,19 @@ def test_graph_classifier_ignores_the_order_of_the_nodes(seed):
         rtol=1e-9,
         atol=1e-9,
     )
+
+
+def test_eigen_stage_refuses_a_graph_too_large_for_every_eigenpair_before_building_it():
+    """Every eigenpair is a dense solve: a graph beyond its limit is refused from its
+    node count (an edgeless graph of 10**8 nodes once allocated gigabytes first, then
+    failed in a MemoryError naming no sample)."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match="sample 1: 100000000 nodes; every eigenpair"):
+            eigen().fit_transform([cycle(5), (10**8, np.zeros((0, 2), dtype=int))])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 50e6

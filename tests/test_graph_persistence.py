@@ -360,3 +360,23 @@ def test_graphs_meshes_and_workers_mix_in_one_call():
     for a, b in zip(serial, parallel, strict=True):
         for x, y in zip(a, b, strict=True):
             np.testing.assert_array_equal(x, y)
+
+
+def test_extended_persistence_refuses_graphs_whose_cycle_table_would_not_fit(monkeypatch):
+    """ext1's table grows with the square of the independent cycles (the complete graph
+    on 1,000 nodes would need 29 GiB): such a graph is refused before any allocation,
+    naming the sample; the count is exact, so repeated edges and loops do not count."""
+    from sklearn_meshph.persistence import graph_extended
+
+    monkeypatch.setattr(graph_extended, "MAX_CYCLE_TABLE_BYTES", 10_000)
+    i, j = np.triu_indices(30, 1)  # K30: 406 independent cycles, 24 KB
+    dense = (30, np.column_stack([i, j]))
+    values = np.arange(30.0)
+    with pytest.raises(ValueError, match="graph: 406 independent cycles; .* would need"):
+        extended_persistence(dense, values)
+    path = np.column_stack([np.arange(29), np.arange(1, 30)])
+    repeated = (30, np.vstack([path] * 40 + [np.column_stack([np.arange(30)] * 2)]))
+    assert len(extended_persistence(repeated, values)["ext1"]) == 0  # a path: no cycle
+    fields = [graph_field(30, path, values), graph_field(*dense, values)]
+    with pytest.raises(ValueError, match="sample 1: 406 independent cycles"):
+        LowerStarPersistence(filtration="extended").fit_transform(fields)

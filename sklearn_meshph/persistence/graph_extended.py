@@ -28,6 +28,8 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from ..graph.validation import Graph
 from ..inputs import check_input
@@ -45,6 +47,37 @@ __all__ = [
 
 #: The keys of :func:`extended_persistence`, in the order of :func:`batch_diagrams`.
 GRAPH_DIAGRAMS = ("ord0", "rel1", "ext0", "ext1")
+
+
+# Bytes at most of ext1's bitset table for one graph: (nodes + cycles) rows of one bit
+# per independent cycle. It grows with the square of the cycles (the complete graph on
+# 700 nodes, 243,951 cycles, needs 7.4 GB), where the rest is linear.
+MAX_CYCLE_TABLE_BYTES = 4 << 30
+
+
+def check_cycle_table(n_nodes: int, edges: np.ndarray, place: str) -> None:
+    """Refuse, before any allocation, a graph whose ``ext1`` table would need more than
+    ``MAX_CYCLE_TABLE_BYTES`` (``edges``: in range, repeats and loops allowed)."""
+
+    def table_bytes(cycles):
+        return (n_nodes + cycles) * ((cycles + 63) // 64) * 8
+
+    if table_bytes(len(edges)) <= MAX_CYCLE_TABLE_BYTES:  # cycles <= edges: cheap bound
+        return
+    low, high = np.minimum(edges[:, 0], edges[:, 1]), np.maximum(edges[:, 0], edges[:, 1])
+    keys = np.unique((low * n_nodes + high)[low != high])
+    adjacency = sp.csr_matrix(
+        (np.ones(len(keys)), (keys // n_nodes, keys % n_nodes)), shape=(n_nodes, n_nodes)
+    )
+    n_components = connected_components(adjacency, directed=False)[0]
+    cycles = len(keys) - n_nodes + n_components
+    if table_bytes(cycles) > MAX_CYCLE_TABLE_BYTES:
+        raise ValueError(
+            f"{place}: {cycles} independent cycles; extended persistence's ext1 over them "
+            f"would need {table_bytes(cycles) / 2**30:.1f} GiB (at most "
+            f"{MAX_CYCLE_TABLE_BYTES / 2**30:.0f} GiB; the table grows with the square of "
+            "the cycles: sparsify the graph, or use filtration='sublevel')"
+        )
 
 
 class GraphCycles(NamedTuple):
@@ -431,5 +464,6 @@ def extended_persistence(sample, values) -> dict[str, np.ndarray]:
             "LowerStarPersistence(filtration='extended')"
         )
     values = _node_values(values, graph.n_nodes)
+    check_cycle_table(graph.n_nodes, graph.edges, "graph")
     diagrams = _graph_diagrams(graph.n_nodes, graph.edges, values, 0.0)
     return dict(zip(GRAPH_DIAGRAMS, diagrams, strict=True))

@@ -19,7 +19,7 @@ from ..mesh.validation import check_values, where
 from ..pointcloud.graph import edge_adjacency, surface_graph
 from .extended import closed_surface
 from .filtrations import ESSENTIAL_POLICIES, FILTRATIONS, function_diagrams
-from .graph_extended import GraphCycles, batch_diagrams
+from .graph_extended import GraphCycles, batch_diagrams, check_cycle_table
 
 __all__ = ["LowerStarPersistence"]
 
@@ -113,7 +113,9 @@ def _diagrams_block(block, **options):
         arrays = _sample_arrays(sample, index)
         _, edges, n_vertices, values, is_graph = arrays
         if is_graph:
-            graphs.append((GraphCycles(n_vertices, _graph_edges(edges)), values))
+            edges = _graph_edges(edges)
+            check_cycle_table(n_vertices, edges, f"sample {index}")
+            graphs.append((GraphCycles(n_vertices, edges), values))
             positions.append(len(out))
             out.append(None)
         else:

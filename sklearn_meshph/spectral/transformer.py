@@ -22,7 +22,7 @@ from ..inputs import check_input
 from ..mesh.cleaning import describe, warn_if_lossy
 from ..mesh.scalar_field import ScalarField
 from .cache import EigenCache, cache_of
-from .eigensolver import COMPONENTS
+from .eigensolver import COMPONENTS, DENSE_LIMIT
 from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .multiplicity import solve_covering, warn_if_repeated
@@ -120,6 +120,12 @@ def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
         vertices, faces = check_input(mesh, index=index)
         graph = isinstance(vertices, Graph)
         if n_eigenpairs is None and graph:
+            if vertices.n_nodes > DENSE_LIMIT:  # before anything the size of the graph
+                raise ValueError(
+                    f"sample {index}: {vertices.n_nodes} nodes; every eigenpair "
+                    f"(components='all' without n_eigenpairs) is a dense solve, for at "
+                    f"most {DENSE_LIMIT} nodes: ask for fewer eigenpairs (n_eigenpairs)"
+                )
             n_eigenpairs = vertices.n_nodes
         else:
             n_eigenpairs = _block(n_eigenpairs or _SIGNATURE_EIGENPAIRS)
