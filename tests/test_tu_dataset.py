@@ -112,6 +112,8 @@ BAD_FILES = [
         r"TINY_A.txt': line 3 holds 3 comma-separated value\(s\) where 2",
     ),
     ({"A": "1.0, 2.0\n"}, r"TINY_A.txt': line 1 holds '1.0', not an integer"),
+    ({"A": "1, 2\n1_0, 2\n"}, r"TINY_A.txt': line 2 holds '1_0', not an integer"),
+    ({"A": "1, 2\n \n7, 1\n"}, r"TINY_A.txt': line 3: node id 7 is outside 1..6"),
     ({"A": "1, 2\n2 3\n"}, r"line 2 holds 1 comma-separated value\(s\) where 2"),
     ({"A": "1\n"}, r"TINY_A.txt': line 1 holds 1 comma-separated value\(s\) where 2"),
     ({"A": "1, 2\n" * 3 + "\n7, 6\n"}, r"TINY_A.txt': line 5: node id 7 is outside 1..6"),
@@ -140,6 +142,25 @@ def test_a_bad_file_is_named_with_its_line(tmp_path, change, message):
     files = {k: v for k, v in {**TINY, **change}.items() if v is not None}
     folder = write_tu(tmp_path, files)
     with pytest.raises(ValueError, match=f"^TU dataset TINY: .*{message}"):
+        load_tu_dataset(folder)
+
+
+def test_lines_of_spaces_and_lone_carriage_returns_are_read_as_the_line_rule_says(tmp_path):
+    """Blank lines hold no row, whatever their spaces; a lone "\\r" ends a line."""
+    spaced = TINY["A"].replace("2, 3\n", "2, 3\n \t \n", 1)
+    _check_tiny(*load_tu_dataset(write_tu(tmp_path / "spaces", {**TINY, "A": spaced})))
+    returns = {**TINY, "A": TINY["A"].replace("\n", "\r")}
+    _check_tiny(*load_tu_dataset(write_tu(tmp_path / "returns", returns)))
+
+
+@pytest.mark.parametrize("ending", [".gz", ".bz2"])
+def test_an_empty_compressed_file_is_refused_not_read_as_no_edges(tmp_path, ending):
+    """Python reads an empty .gz or .bz2 as no data: a failed download would have been
+    a dataset of graphs without edges."""
+    folder = write_tu(tmp_path, TINY)
+    (folder / "TINY_A.txt").unlink()
+    (folder / f"TINY_A.txt{ending}").write_bytes(b"")
+    with pytest.raises(ValueError, match=r"TINY_A.txt.*' is empty, not valid"):
         load_tu_dataset(folder)
 
 

@@ -33,11 +33,14 @@ from .validation import Graph
 __all__ = ["MAX_TU_FILE_SIZE", "load_tu_dataset", "tu_dataset_names"]
 
 #: Largest size of one file of a TU dataset, in bytes (512 MiB, as for point-cloud text),
-#: decompressed: the parsed integers take up to four times the text of short lines.
+#: decompressed. Loading peaks near 9 times the edge file's size for its shortest lines
+#: ("1, 2": 16 bytes of pairs per 5 of text, and the text itself): 0.9 GB for 100 MB,
+#: so about 4.5 GB for a file at the limit.
 MAX_TU_FILE_SIZE = 512 * 1024**2
 
 _ENDINGS = ("", *COMPRESSIONS)
 _INT64 = np.iinfo(np.int64)
+_NO_BAD_LINE = "its lines are not plain numbers"
 
 
 def _find(folder: str, name: str, part: str) -> str | None:
@@ -64,6 +67,8 @@ def tu_dataset_names(folder) -> list[str]:
 def _content(path: str, place: str) -> bytes:
     _, compression = split_compression(path)
     if compression is not None:
+        if os.path.getsize(path) == 0:  # Python reads an empty .gz or .bz2 as no data
+            raise ValueError(f"{place}: TU file {path!r} is empty, not valid {compression} data")
         return decompress(path, compression, place, MAX_TU_FILE_SIZE, "TU file").getvalue()
     if os.path.getsize(path) > MAX_TU_FILE_SIZE:
         raise ValueError(
@@ -93,28 +98,40 @@ def _bad_line(content: bytes, dtype, width: int | None) -> str:
                 "are expected"
             )
         for text in fields:
+            kind = "an integer" if dtype is np.int64 else "a number"
+            if "_" in text:  # Python's int and float read "1_0" as 10; NumPy does not
+                return f"line {number} holds {text[:40]!r}, not {kind}"
             try:
                 value = int(text) if dtype is np.int64 else float(text)
             except ValueError:
-                kind = "an integer" if dtype is np.int64 else "a number"
                 return f"line {number} holds {text[:40]!r}, not {kind}"
             if dtype is np.int64 and not _INT64.min <= value <= _INT64.max:
                 return f"line {number} holds {value}, beyond 64-bit integers"
-    return "its lines are not plain numbers"
+    return _NO_BAD_LINE
+
+
+def _loaded(content: bytes, dtype) -> np.ndarray | None:
+    """``content`` parsed by NumPy as comma-separated rows, or None if it cannot be."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # an empty file: no rows
+            return np.loadtxt(
+                io.BytesIO(content), delimiter=",", dtype=dtype, ndmin=2, comments=None
+            )
+    except ValueError:
+        return None
 
 
 def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
     """The numbers of a TU file as a 2-d array: a row per non-blank line, ``width``
     columns (any width, the same on every line, when None)."""
     content = _content(path, place)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # an empty file: no rows
-            table = np.loadtxt(
-                io.BytesIO(content), delimiter=",", dtype=dtype, ndmin=2, comments=None
-            )
-    except ValueError:
-        table = None
+    table = _loaded(content, dtype)
+    if table is None and _bad_line(content, dtype, width) == _NO_BAD_LINE:
+        # Lines of spaces alone, or lines ended by a lone "\r": NumPy refuses what the
+        # line rule (and _line_number) reads as blank lines; read again without them.
+        filled = [line for line in content.splitlines() if line.strip()]
+        table = _loaded(b"\n".join(filled), dtype)
     if table is not None and table.size == 0:
         table = np.empty((0, width or 1), dtype=dtype)
     if table is None or (width is not None and table.shape[1] != width):
@@ -175,14 +192,15 @@ def _edges(path: str, ids: np.ndarray, place: str):
     in range, both ends in one graph; self-loops dropped."""
     pairs = _table(path, np.int64, 2, place)
     n_nodes = len(ids)
-    outside = (pairs < 1) | (pairs > n_nodes)
-    if outside.any():
+    # In place and a column at a time where it can be: the table is the largest thing
+    # loaded (a file at MAX_TU_FILE_SIZE of short lines is about 1.7 GB of pairs).
+    if pairs.size and (pairs.min() < 1 or pairs.max() > n_nodes):
+        outside = (pairs < 1) | (pairs > n_nodes)
         row = int(np.flatnonzero(outside.any(axis=1))[0])
         value = pairs[row][outside[row]][0]
         raise _row_error(place, path, row, f"node id {value} is outside 1..{n_nodes}")
-    pairs = pairs - 1
-    graphs = ids[pairs]
-    across = graphs[:, 0] != graphs[:, 1]
+    pairs -= 1
+    across = ids[pairs[:, 0]] != ids[pairs[:, 1]]
     if across.any():
         row = int(np.flatnonzero(across)[0])
         i, j = pairs[row] + 1
@@ -190,10 +208,16 @@ def _edges(path: str, ids: np.ndarray, place: str):
             place,
             path,
             row,
-            f"edge ({i}, {j}) joins graph {graphs[row, 0]} and graph {graphs[row, 1]}",
+            f"edge ({i}, {j}) joins graph {ids[i - 1]} and graph {ids[j - 1]}",
         )
+    del across
     low, high = pairs.min(axis=1), pairs.max(axis=1)
-    keys = np.sort((low * n_nodes + high)[low != high])
+    del pairs
+    keys = low * n_nodes
+    keys += high
+    keys = keys[low != high]
+    del low, high
+    keys.sort()
     keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if len(keys) else keys
     return keys // n_nodes, keys % n_nodes
 
