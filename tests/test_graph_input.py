@@ -73,6 +73,18 @@ def test_a_sparse_adjacency_is_read_without_making_it_dense():
     assert matrix.nnz == 9  # the caller's matrix is left as it was
     booleans = _adjacency(EDGES, np.ones(5), N_NODES).astype(bool)
     _same(check_graph(booleans), EDGES, np.ones(5))
+    # repeated entries of small integer types are summed as floats, not wrapped
+    small = sp.coo_matrix(
+        (np.array([200, 100, 150, 150], np.uint8), ([0, 0, 1, 1], [1, 1, 0, 0])),
+        shape=(2, 2),
+    )
+    assert small.dtype == np.uint8
+    _same(check_graph(small), [[0, 1]], [300.0], n_nodes=2)
+    # weights below the smallest normal float (their degrees' inverse overflows) are
+    # named with the sample, as the other weight errors are
+    tiny = sp.coo_matrix(([1e-310, 1e-310], ([0, 1], [1, 0])), shape=(2, 2))
+    with pytest.raises(ValueError, match="^sample 3: edge weights must be at least"):
+        check_input(tiny, index=3)
 
 
 def test_a_huge_sparse_graph_stays_linear_in_memory():
@@ -180,6 +192,7 @@ def test_a_graph_is_returned_as_is_and_checked_when_made():
         ((3, [[-1, 2]], [1.0]), ValueError, "outside 0..2"),
         ((3, [[0, 1]], [0.0]), ValueError, "positive and finite"),
         ((3, [[0, 1]], [np.inf]), ValueError, "positive and finite"),
+        ((3, [[0, 1]], [1e-310]), ValueError, "at least 2.23e-308 .*subnormal.*got 1e-310"),
         ((3, [[0, 1]], [1.0, 2.0]), ValueError, "1 edges but 2 weights"),
         ((3, [[0.0, 1.0]], [1.0]), TypeError, "edges must be integers"),
     ],

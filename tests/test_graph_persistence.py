@@ -207,6 +207,8 @@ def test_bad_input_is_named():
         extended_persistence(square, [0.0, np.inf, -np.inf, 1.0])
     with pytest.raises(ValueError, match="graph: values must be a numeric array"):
         extended_persistence(square, ["a", "b", "c", "d"])
+    with pytest.raises(TypeError, match="graph: values must be real numbers, got complex"):
+        extended_persistence(square, np.arange(4) + 5j)
     huge = extended_persistence(square, [1e308, 1e308, 0.0, 1e308])
     np.testing.assert_array_equal(huge["ext1"], [[1e308, 0.0]])
     with pytest.raises(ValueError, match=r"values must have shape \(4,\), got \(4, 2\)"):

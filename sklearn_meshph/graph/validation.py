@@ -40,6 +40,8 @@ _SYMMETRY_RTOL = 1e-10
 # Most nodes a graph may have: scipy's sparse graph routines index nodes with 32-bit
 # integers, and an edge (i, j) is keyed by i * n_nodes + j, which must fit in 64 bits.
 MAX_NODES = 2**31 - 1
+# The smallest normal float64: the Laplacians divide by degrees.
+_TINY = float(np.finfo(np.float64).tiny)
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -139,6 +141,11 @@ class Graph:
             raise ValueError(f"{place}: edges must be sorted rows without repeats")
         if not ((weights > 0) & (weights < np.inf)).all():  # NaN fails both
             raise ValueError(f"{place}: edge weights must be positive and finite")
+        if (weights < _TINY).any():  # a subnormal degree's inverse is inf
+            raise ValueError(
+                f"{place}: edge weights must be at least {_TINY:.3g} (smaller ones are "
+                f"subnormal floats, whose inverse overflows), got {weights.min():.3g}"
+            )
         node_values = _check_node_values(self.node_values, n_nodes, place)
         object.__setattr__(self, "n_nodes", n_nodes)
         object.__setattr__(self, "edges", _frozen(edges))
@@ -172,6 +179,17 @@ def is_graph(sample) -> bool:
     return hasattr(sample, "adj") and hasattr(sample, "nodes")
 
 
+def _graph(place: str, *fields) -> Graph:
+    """``Graph(*fields)``, its errors naming ``place`` (the sample) rather than "graph"."""
+    try:
+        return Graph(*fields)
+    except ValueError as error:
+        text = str(error)
+        if not text.startswith("graph: "):
+            raise
+        raise ValueError(f"{place}: {text.removeprefix('graph: ')}") from None
+
+
 def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: str) -> Graph:
     """The :class:`Graph` of edges in any order and direction: self-loops and edges of
     weight 0 dropped, repeats (both directions too) made one, of the first one's weight
@@ -187,7 +205,7 @@ def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: st
     high = np.maximum(edges[keep, 0], edges[keep, 1])
     keys, first = np.unique(low * n_nodes + high, return_index=True)
     pairs = np.column_stack([keys // n_nodes, keys % n_nodes])
-    return Graph(n_nodes, pairs, weights[keep][first], node_values)
+    return _graph(place, n_nodes, pairs, weights[keep][first], node_values)
 
 
 def _weight(value, place: str) -> float:
@@ -278,9 +296,11 @@ def _from_sparse(matrix, place: str) -> Graph:
     n_nodes = _n_nodes(matrix.shape[0], place)
     if matrix.dtype.kind not in "biuf":
         raise TypeError(f"{place}: adjacency entries must be real numbers, got {matrix.dtype}")
-    coo = sp.coo_array(matrix, copy=True)  # a copy: the caller's matrix is left alone
+    # A float64 copy (the caller's matrix is left alone) before repeated entries are
+    # summed: in uint8, 200 + 100 would wrap to 44.
+    coo = sp.coo_array(matrix, dtype=np.float64, copy=True)
     coo.sum_duplicates()  # also sorts the entries by row, then column
-    values = coo.data.astype(np.float64)
+    values = coo.data
     if not np.isfinite(values).all():
         raise ValueError(f"{place}: the adjacency matrix has a NaN or infinite entry")
     if (values < 0).any():
@@ -295,7 +315,7 @@ def _from_sparse(matrix, place: str) -> Graph:
     _asymmetry(rows, cols, values, n_nodes, place)
     upper = rows < cols
     edges = np.column_stack([rows[upper], cols[upper]])
-    return Graph(n_nodes, edges, values[upper])
+    return _graph(place, n_nodes, edges, values[upper])
 
 
 def check_graph(sample, *, index: int | None = None) -> Graph:

@@ -382,6 +382,8 @@ def _node_values(values, n_nodes: int) -> np.ndarray:
     """``values`` as a contiguous finite float64 ``(n_nodes,)`` array, or the error of
     :func:`~sklearn_meshph.mesh.validation.check_values` (with less overhead: graphs are
     small)."""
+    if np.iscomplexobj(values):  # NumPy would drop the imaginary part with a warning
+        raise TypeError("graph: values must be real numbers, got complex ones")
     try:
         array = np.ascontiguousarray(values, dtype=np.float64)
     except (ValueError, TypeError):
