@@ -389,8 +389,8 @@ def cube():
 
 def symmetric_graphs():
     """Graphs whose nodes' signatures are equal up to rounding (vertex-transitive or
-    nearly), where the order of the nodes decides the rounding; and two molecules'
-    shapes (rings with symmetric branches)."""
+    nearly), where the order of the nodes decides the rounding; and a ring with two
+    opposite arms (a molecule's shape)."""
     ring_with_arms = (8, np.array([[i, (i + 1) % 6] for i in range(6)] + [[0, 6], [3, 7]]))
     return [cycle(6), cycle(9), star(7), complete(5), petersen(), cube(), ring_with_arms]
 
