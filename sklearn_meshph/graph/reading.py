@@ -127,15 +127,18 @@ def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
     columns (any width, the same on every line, when None)."""
     content = _content(path, place)
     table = _loaded(content, dtype)
-    if table is None and _bad_line(content, dtype, width) == _NO_BAD_LINE:
-        # Lines of spaces alone, or lines ended by a lone "\r": NumPy refuses what the
-        # line rule (and _line_number) reads as blank lines; read again without them.
-        filled = [line for line in content.splitlines() if line.strip()]
-        table = _loaded(b"\n".join(filled), dtype)
+    reason = None
+    if table is None:
+        reason = _bad_line(content, dtype, width)
+        if reason == _NO_BAD_LINE:
+            # Lines of spaces alone, or lines ended by a lone "\r": NumPy refuses what
+            # the line rule (and _line_number) reads as blank lines; read without them.
+            filled = [line for line in content.splitlines() if line.strip()]
+            table = _loaded(b"\n".join(filled), dtype)
     if table is not None and table.size == 0:
         table = np.empty((0, width or 1), dtype=dtype)
     if table is None or (width is not None and table.shape[1] != width):
-        reason = _bad_line(content, dtype, width)
+        reason = reason or _bad_line(content, dtype, width)
         raise ValueError(f"{place}: cannot read TU file {path!r}: {reason}")
     if dtype is np.float64 and not np.isfinite(table).all():
         line = _line_number(content, int(np.flatnonzero(~np.isfinite(table).all(axis=1))[0]))

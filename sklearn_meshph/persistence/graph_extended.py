@@ -64,13 +64,12 @@ def check_cycle_table(n_nodes: int, edges: np.ndarray, place: str) -> None:
 
     if table_bytes(len(edges)) <= MAX_CYCLE_TABLE_BYTES:  # cycles <= edges: cheap bound
         return
-    low, high = np.minimum(edges[:, 0], edges[:, 1]), np.maximum(edges[:, 0], edges[:, 1])
-    keys = np.unique((low * n_nodes + high)[low != high])
+    simple = _simple_edges(n_nodes, np.ascontiguousarray(edges, dtype=np.int64))
     adjacency = sp.csr_matrix(
-        (np.ones(len(keys)), (keys // n_nodes, keys % n_nodes)), shape=(n_nodes, n_nodes)
+        (np.ones(len(simple)), (simple[:, 0], simple[:, 1])), shape=(n_nodes, n_nodes)
     )
     n_components = connected_components(adjacency, directed=False)[0]
-    cycles = len(keys) - n_nodes + n_components
+    cycles = len(simple) - n_nodes + n_components
     if table_bytes(cycles) > MAX_CYCLE_TABLE_BYTES:
         raise ValueError(
             f"{place}: {cycles} independent cycles; extended persistence's ext1 over them "
