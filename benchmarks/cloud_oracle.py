@@ -159,8 +159,8 @@ def with_neighbours_left_out(points, leave_out):
     point's surface neighbours (an oracle: the mask comes from the mesh)."""
     original = _triangulation.surface_neighbours
 
-    def patched(points, n_neighbors):
-        neighbors, usable, normal, basis = original(points, n_neighbors)
+    def patched(points, n_neighbors, knn=None):
+        neighbors, usable, normal, basis = original(points, n_neighbors, knn)
         return neighbors, usable & ~leave_out(neighbors), normal, basis
 
     _triangulation.surface_neighbours = patched
