@@ -33,7 +33,12 @@ edges as in space), which tell what telling sheets apart would give. Each Shape-
 of the piece of largest mass (an oracle can cut a thin tip off). Then the default's
 signature (log-HKS) from five of these pencils and our stiffness without its negative
 weights, each on the decimated mesh's faces, and its ``ord1`` 1-NN: which of the
-stiffness and the mass moves the eigenfunctions.
+stiffness and the mass moves the eigenfunctions; beside them the mesh's surface
+triangulated otherwise (its intrinsic Delaunay triangulation), our fans made into one
+triangulation (every triangle once, or a manifold chosen from them) and the two oracles:
+does another valid triangulation of the same points keep the mesh's figure, and do the
+fans lose by disagreeing or by joining other sheets? Each row is scored on the samples
+where its pencil has mass at every vertex and one piece, the mesh's beside it on those.
 
 Last, how much of each class's surface has **another sheet within one spacing**: the
 decimated mesh's vertices with a vertex within one spacing (``sqrt(area / n)``) in space
@@ -238,21 +243,64 @@ def without_negative_weights(L):
     return (sp.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights).tocsr()
 
 
+def fan_triangulations(points):
+    """Our fans' triangles made into one triangulation, two ways, each triangle measured
+    flat in space (not on a point's quadric) and counted once: every triangle some fan
+    holds (a soup, overlapping where fans disagree), and a manifold chosen greedily from
+    them (those held by more fans first, then the rounder; a triangle is taken while
+    none of its edges has two triangles yet). Do the fans lose by disagreeing?"""
+    fans = np.sort(_triangulation.tangent_fans(points)[0], axis=1)
+    triangles, held = np.unique(fans, axis=0, return_counts=True)
+    corners = points[triangles]
+    sides = corners[:, [1, 2, 0]] - corners
+    roundness = np.linalg.norm(np.cross(sides[:, 0], sides[:, 1]), axis=1) / (sides**2).sum(
+        axis=(1, 2)
+    )
+    taken, edges_used = [], {}
+    for t in np.lexsort((-roundness, -held)):
+        a, b, c = triangles[t]
+        edges = ((a, b), (b, c), (a, c))
+        if all(edges_used.get(e, 0) < 2 for e in edges):
+            for e in edges:
+                edges_used[e] = edges_used.get(e, 0) + 1
+            taken.append(t)
+    return triangles, triangles[np.sort(taken)]
+
+
 def signature_fields(points, faces, built):
     """The default's signature (log-HKS at 5 times from 48 eigenpairs, unit area) from
-    each pencil of :func:`pencils` and from our stiffness without its negative weights,
-    each on the mesh's faces (the complex held fixed), or None where one of them leaves
-    a vertex without mass or splits (the fields would not be comparable)."""
+    each pencil of :func:`pencils`, from our stiffness without its negative weights, from
+    the mesh's own surface triangulated otherwise (its intrinsic Delaunay triangulation,
+    robust-laplacian's ``mesh_laplacian``), from our fans made into one triangulation
+    (:func:`fan_triangulations`), and from the two oracles of :func:`operators`, each on
+    the mesh's faces (the complex held fixed). A pencil that leaves a vertex without
+    mass or splits gives None (its fields would not be comparable)."""
+    import robust_laplacian
+
     L_ours, M_ours = built["ours"]
+    soup, manifold = fan_triangulations(points)
+    normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
     all_pencils = {
         **built,
         "ours, negative weights set to 0": (without_negative_weights(L_ours), M_ours),
+        "the mesh's intrinsic Delaunay triangulation": robust_laplacian.mesh_laplacian(
+            points, faces
+        ),
+        "our fans' triangles, each once, flat": cotangent_laplacian(points, soup),
+        "a manifold chosen from our fans, flat": cotangent_laplacian(points, manifold),
+        "ours, neighbours facing away (mesh normals) left out": with_neighbours_left_out(
+            points, facing_away(normals)
+        ),
+        "ours, neighbours 2x farther along the mesh left out": with_neighbours_left_out(
+            points, around(points, faces)
+        ),
     }
     fields = {}
     for label, (L, M) in all_pencils.items():
         L, M = sp.csr_matrix(L), sp.dia_matrix(M)
         if (M.diagonal() <= 0).any() or connected_components(abs(L) > 0, directed=False)[0] > 1:
-            return None
+            fields[label] = None
+            continue
         values, vectors = generalized_eigenpairs(L, M / M.diagonal().sum(), N_EIGENVALUES)
         signature, _ = SIGNATURES["log-hks"].value(values, vectors, 5)
         fields[label] = ScalarField(points, faces, signature, eigenvalues=values)
@@ -361,16 +409,23 @@ def main():
         print(f"- sample {i} ({names[y[i]]}): {first[i, 0]:.1f} and {first[i, 1]:.1f}")
 
     signatures = [signature_fields(*b) for b in built]
-    usable = np.flatnonzero([f is not None for f in signatures])
+    reference = "the mesh's L and M"
     print(
-        f"\n`ord1` of the signature of each pencil, on the mesh's faces, on the {len(usable)} "
-        "samples where every pencil has mass at every vertex and one piece"
+        "\n`ord1` of the signature of each pencil, on the mesh's faces (the complex held "
+        "fixed), on the samples where that pencil and the mesh's have mass at every vertex "
+        "and one piece, beside the mesh's pencil on the same samples"
     )
-    print("| pencil | `ord1` 1-NN |\n|---|---|")
+    print("| pencil | samples | `ord1` 1-NN | the mesh's on them |\n|---|---|---|---|")
     ord1 = dict(make_mesh_distance(n_jobs=2).named_steps["distance"].transformer_list)["ord1"]
-    for label in signatures[usable[0]]:
-        matrix = ord1.fit_transform([signatures[i][label] for i in usable])
-        print(f"| {label} | {loo_1nn(matrix, y[usable]):.3f} |", flush=True)
+    for label in signatures[0]:
+        usable = np.flatnonzero(
+            [f[label] is not None and f[reference] is not None for f in signatures]
+        )
+        score, mesh_score = (
+            loo_1nn(ord1.fit_transform([signatures[i][key] for i in usable]), y[usable])
+            for key in (label, reference)
+        )
+        print(f"| {label} | {len(usable)} | {score:.3f} | {mesh_score:.3f} |", flush=True)
 
     shares = np.array([contact_share(d) for d in decimated])
     print("\nVertices of the decimated meshes with another sheet within one spacing")
