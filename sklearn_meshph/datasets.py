@@ -28,6 +28,10 @@ __all__ = [
     "sample_point_cloud",
 ]
 
+#: The most points :func:`sample_point_cloud` draws (holes' and outliers included): its
+#: arrays take about 150 bytes a point at their peak, 1.5 GB here.
+MAX_SAMPLE_POINTS = 10_000_000
+
 _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
 #: The file name endings :func:`load_mesh_folder` reads by default: each mesh format,
@@ -486,7 +490,9 @@ def sample_point_cloud(
     Raises
     ------
     ValueError
-        If the mesh has no area, or if ``hole_fraction`` is too small for every hole
+        If the mesh has no area, if more than :data:`MAX_SAMPLE_POINTS` points would
+        be drawn, if ``noise`` or the outliers' box take the points beyond float64's
+        range, or if ``hole_fraction`` is too small for every hole
         to remove a point.
 
     Examples
@@ -503,13 +509,6 @@ def sample_point_cloud(
     (1005, 3)
     """
     vertices, faces = check_mesh(mesh)
-    rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
-    corners = vertices[faces]
-    areas = np.linalg.norm(
-        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
-    )
-    if not areas.sum() > 0:
-        raise ValueError("mesh: the surface has no area to sample")
     n_removed = round(n_points * hole_fraction / (1 - hole_fraction)) if holes else 0
     if n_removed < holes:
         raise ValueError(
@@ -517,6 +516,22 @@ def sample_point_cloud(
             f"{holes} holes: each hole needs at least one point (a larger hole_fraction, "
             "more points or fewer holes)"
         )
+    if n_points + n_removed + outliers > MAX_SAMPLE_POINTS:
+        raise ValueError(
+            f"n_points={n_points} (with {n_removed} drawn for the holes and "
+            f"{outliers} outliers) is more than the {MAX_SAMPLE_POINTS:,} points a sample "
+            "may have (its arrays would take several gigabytes)"
+        )
+    rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
+    corners = vertices[faces]
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        areas = _areas(corners)
+    if not (np.isfinite(areas.sum()) and areas.sum() > 0):
+        # Coordinates near float's limits: the areas over- or underflow, their ratios
+        # (all that the draw uses) do not with the coordinates scaled to at most 1.
+        areas = _areas(corners / np.abs(vertices).max())
+    if not areas.sum() > 0:
+        raise ValueError("mesh: the surface has no area to sample")
     weights = areas if density == 1 else _uneven(corners, areas, density, rng)
     n_drawn = n_points + n_removed
     chosen = rng.choice(len(faces), size=n_drawn, p=weights / weights.sum())
@@ -527,7 +542,7 @@ def sample_point_cloud(
     a, b, c = (corners[chosen, k] for k in range(3))
     points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
     low, high = vertices.min(axis=0), vertices.max(axis=0)
-    diagonal = float(np.linalg.norm(high - low))
+    diagonal = math.hypot(*(high - low))  # no overflow for coordinates near the limits
     if noise > 0:
         points = points + rng.normal(scale=noise * diagonal, size=points.shape)
     if holes:
@@ -536,7 +551,20 @@ def sample_point_cloud(
         margin = diagonal / 4
         stray = rng.uniform(low - margin, high + margin, size=(outliers, 3))
         points = np.concatenate([points, stray])
+    if not np.isfinite(points).all():
+        raise ValueError(
+            f"the sample is not finite: the mesh's coordinates (bounding-box diagonal "
+            f"{diagonal:.3g}) with noise={noise!r} or outliers={outliers!r} leave "
+            "float64's range"
+        )
     return points
+
+
+def _areas(corners):
+    """Twice the areas of the triangles ``(m, 3, 3)``."""
+    return np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
 
 
 def _uneven(corners, areas, density: float, rng):
@@ -547,7 +575,8 @@ def _uneven(corners, areas, density: float, rng):
     order = np.argsort(height, kind="stable")
     cumulative = np.cumsum(areas[order])
     middle = height[order[np.searchsorted(cumulative, cumulative[-1] / 2)]]
-    return np.where(height > middle, density * areas, areas)
+    # The sparse side divided (density >= 1), so that no weight overflows.
+    return np.where(height > middle, areas, areas / density)
 
 
 def _cut_holes(points, holes: int, n_removed: int, rng):

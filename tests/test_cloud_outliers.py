@@ -91,3 +91,50 @@ def test_a_pair_of_outliers_does_not_vouch_for_itself():
     mask = sparse_outliers(np.vstack([plane, pair]))
     np.testing.assert_array_equal(np.flatnonzero(mask), [2000, 2001])
     assert not sparse_outliers(plane[:10]).any()  # too few points to compare
+
+
+def sphere_points(n=1500, seed=0):
+    points = np.random.default_rng(seed).normal(size=(n, 3))
+    return points / np.linalg.norm(points, axis=1)[:, None]
+
+
+@pytest.mark.parametrize(
+    "stray",
+    [
+        np.array([[1e9, 0.0, 0.0]]),  # welded the surface into 14 points
+        np.array([[1e10, 0.0, 0.0]]),  # "2 distinct points"
+        np.random.default_rng(3).normal(size=(75, 3)) * 1e10,  # the 75 were kept
+    ],
+)
+def test_a_far_outlier_does_not_weld_the_surface(stray):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshCleaningWarning)
+        field = fields([np.vstack([sphere_points(), stray])])[0]
+    assert len(field.vertices) == 1500
+    assert field.cleaning.n_welded == 0
+    assert field.cleaning.n_far_points == len(stray)
+
+
+def test_the_component_kept_is_the_one_of_most_points_not_of_most_area():
+    # 15 points scattered five radii out span more area than the sphere: the sphere
+    # was dropped as far and the scatter kept.
+    scatter = np.random.default_rng(1).normal(size=(15, 3)) * 5
+    with pytest.warns(MeshCleaningWarning):
+        field = fields([np.vstack([sphere_points(), scatter])])[0]
+    np.testing.assert_array_equal(field.vertex_indices, np.arange(1500))
+
+
+def test_functions_given_equal_points_refuse_them_naming_the_sample():
+    from sklearn_meshph import LowerStarPersistence, lower_star_persistence, point_cloud_laplacian
+
+    points = np.vstack([sphere_points(), np.repeat(sphere_points()[:1], 12, axis=0)])
+    with pytest.raises(ValueError, match=r"point cloud: 12 of the point cloud's points are equal"):
+        lower_star_persistence(points, points[:, 2])
+    with pytest.raises(ValueError, match=r"sample 1: 12 of the point cloud's points are equal"):
+        LowerStarPersistence().fit_transform(
+            [(sphere_points(), sphere_points()[:, 0]), (points, points[:, 2])]
+        )
+    with pytest.raises(ValueError, match=r"points: 1500 of the point cloud's points are equal"):
+        point_cloud_laplacian(np.vstack([sphere_points(), sphere_points()]))
+    with pytest.raises(ValueError, match=r"points: 9 of the point cloud's points are equal"):
+        point_cloud_laplacian(np.zeros((10, 3)))

@@ -446,3 +446,53 @@ def test_text_point_cloud_errors_name_the_line(tmp_path):
         read_point_cloud_file(path)
     path.write_text("7\n1 2 3 4\n5 6 7 8\n")
     np.testing.assert_array_equal(read_point_cloud_file(path), [[1, 2, 3], [5, 6, 7]])
+
+
+def test_text_point_cloud_refuses_long_lines_and_carriage_returns(tmp_path):
+    from sklearn_meshph.pointcloud.reading import MAX_LINE_LENGTH, read_point_cloud_file
+
+    # A 0.5 MB gzip of one 6 MB line: before, the line was held and split (7 GB for 170
+    # of them); now it is refused at MAX_LINE_LENGTH bytes.
+    bomb = tmp_path / "bomb.xyz.gz"
+    bomb.write_bytes(gzip.compress(b"12 " * 2_000_000))
+    with pytest.raises(ValueError, match=rf"line 1 is longer than {MAX_LINE_LENGTH} bytes"):
+        read_point_cloud_file(bomb)
+    lone = tmp_path / "mac.xyz"
+    lone.write_bytes(b"0 0 0\r1 0 0\r0 1 0\r0 0 1\r")
+    with pytest.raises(ValueError, match=r"line 1 holds carriage returns"):
+        read_point_cloud_file(lone)
+    windows = tmp_path / "windows.xyz"
+    windows.write_bytes(b"0 0 0\r\n1 0 0\r\n0 1 0\r\n")
+    assert read_point_cloud_file(windows).shape == (3, 3)
+    underscore = tmp_path / "underscore.xyz"  # float() reads 1_0, NumPy does not
+    underscore.write_bytes(b"0 0 0\n0 1_0 0\n")
+    with pytest.raises(ValueError, match=r"line 2 holds something other than numbers"):
+        read_point_cloud_file(underscore)
+
+
+def test_text_point_cloud_names_what_is_not_a_regular_file(tmp_path):
+    from sklearn_meshph.pointcloud.reading import read_point_cloud_file
+
+    (tmp_path / "folder.xyz").mkdir()
+    with pytest.raises(ValueError, match=r"folder\.xyz' is not a regular file"):
+        read_point_cloud_file(tmp_path / "folder.xyz")
+    with pytest.raises(ValueError, match=r"absent\.xyz' does not exist"):
+        read_point_cloud_file(tmp_path / "absent.xyz")
+
+
+def test_text_point_cloud_that_changes_between_the_passes_is_refused(tmp_path, monkeypatch):
+    from sklearn_meshph.pointcloud import reading
+
+    path = tmp_path / "scan.xyz"
+    path.write_text("".join(f"{k} {k % 7} {k % 3}\n" for k in range(500)))
+    original, calls = reading._data_lines, []
+
+    def shrinking(*args):  # the second pass finds a shorter file
+        calls.append(1)
+        if len(calls) == 2:
+            path.write_text("".join(f"{k} 0 0\n" for k in range(100)))
+        return original(*args)
+
+    monkeypatch.setattr(reading, "_data_lines", shrinking)
+    with pytest.raises(ValueError, match=r"changed while it was read \(500 points counted"):
+        reading.read_point_cloud_file(path)

@@ -127,3 +127,23 @@ def test_holes_too_small_to_remove_a_point_are_refused():
     with pytest.raises(ValueError, match="removes 11 of the points for 12 holes"):
         sample_point_cloud(SPHERE, 100, holes=12)
     assert sample_point_cloud(SPHERE, 100, holes=11, random_state=0).shape == (100, 3)
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e154, 1e300])
+def test_meshes_near_the_float_limits_are_sampled_on_their_surface(scale):
+    # Their areas over- or underflow: they were "without area" or gave NaN probabilities.
+    mesh = trimesh.Trimesh(SPHERE.vertices * scale, SPHERE.faces, process=False)
+    points = sample_point_cloud(mesh, 50, density=4.0, random_state=0)
+    np.testing.assert_allclose(np.linalg.norm(points / scale, axis=1), 1.0, atol=0.01)
+
+
+def test_samples_beyond_float_range_or_memory_are_refused():
+    with pytest.raises(ValueError, match=r"noise=1e\+308 or outliers=0 leave float64's range"):
+        sample_point_cloud(SPHERE, 10, noise=1e308, random_state=0)
+    with pytest.raises(ValueError, match=r"more than the 10,000,000 points a sample may have"):
+        sample_point_cloud(SPHERE, 10**9)
+    with pytest.raises(ValueError, match=r"and 9999999 outliers\) is more than"):
+        sample_point_cloud(SPHERE, 2, outliers=9_999_999)
+    # The densest side's weights no longer overflow: nearly every point is on it.
+    points = sample_point_cloud(SPHERE, 200, density=1e308, random_state=0)
+    assert np.isfinite(points).all()

@@ -150,7 +150,7 @@ def lower_star_persistence(mesh, values) -> np.ndarray:
     if isinstance(vertices, Graph):
         adjacency = edge_adjacency(vertices.edges, n_vertices)
     elif faces is None:
-        adjacency = edge_adjacency(surface_graph(vertices), n_vertices)
+        adjacency = edge_adjacency(surface_graph(vertices, "point cloud"), n_vertices)
     else:
         adjacency = mesh_edges(faces, n_vertices)
     pairs, essential, _ = sublevel_h0(adjacency, values)

@@ -39,7 +39,8 @@ def _sample_arrays(sample, index):
             return np.empty((0, 3), dtype=np.int64), first.edges, first.n_nodes, values, True
         values = check_values(values, len(first), where(index))
         if faces is None:
-            return np.empty((0, 3), dtype=np.int64), surface_graph(first), len(first), values, False
+            edges = surface_graph(first, where(index, "point cloud"))
+            return np.empty((0, 3), dtype=np.int64), edges, len(first), values, False
         return faces, None, len(first), values, False
     raise TypeError(
         f"sample {index}: expected a ScalarField or a (mesh, values) pair, "

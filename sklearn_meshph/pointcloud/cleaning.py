@@ -32,10 +32,32 @@ def _refuse_degenerate(points: np.ndarray, place: str) -> None:
         )
 
 
-def _largest(labels: np.ndarray, area: np.ndarray) -> tuple[np.ndarray, int, float]:
-    """The mask of the component of largest ``area`` (ties: the lowest label), the number
-    of other components and their share of the area."""
-    largest = int(np.argmax(area))
+def _weld_rtol(points: np.ndarray) -> float:
+    """``WELD_RTOL`` of the surface's extent, as a fraction of the whole box's diagonal.
+
+    Far points have not been dropped yet when points are welded: one outlier at 1e9
+    times the shape's size would make the whole box's diagonal, and the tolerance, large
+    enough to weld the surface into a few points. The surface's extent is taken as
+    twice the diagonal of the box between the coordinates' quartiles (which outliers
+    barely move), when that is smaller than the whole box's.
+    """
+    low, high = points.min(axis=0), points.max(axis=0)
+    diagonal = float(np.linalg.norm(high - low))
+    quartiles = np.percentile(points, [25, 75], axis=0)
+    extent = 2.0 * float(np.linalg.norm(quartiles[1] - quartiles[0]))
+    if not (0 < extent < diagonal):
+        return WELD_RTOL
+    return WELD_RTOL * extent / diagonal
+
+
+def _largest(labels: np.ndarray, area: np.ndarray, size=None) -> tuple[np.ndarray, int, float]:
+    """The mask of the component of largest ``area`` (ties: the lowest label), or with
+    ``size`` (points per component) of most points (ties: the largest area, then the
+    lowest label); the number of other components and their share of the area."""
+    if size is None:
+        largest = int(np.argmax(area))
+    else:
+        largest = int(np.lexsort((np.arange(len(area)), -area, -size))[0])
     total = float(area.sum())
     share = 1.0 - float(area[largest]) / total if total > 0 else 0.0
     return labels == largest, len(area) - 1, max(share, 0.0)
@@ -43,7 +65,9 @@ def _largest(labels: np.ndarray, area: np.ndarray) -> tuple[np.ndarray, int, flo
 
 def _far_components(points, laplacian, components, place):
     """Drop the points far from the rest (:func:`.graph.neighbourhood_components`): the
-    component of largest area is kept, its operator built without the others; then the
+    component of most points is kept (not of largest area: a scatter of stray points
+    spans more area than the dense surface it surrounds), its operator built without
+    the others; then the
     outliers of that component (:func:`.graph.sparse_outliers`), each a component of its
     own. Returns ``(kept, L, M, triangles, n_other, share)``."""
     # One neighbour search serves every step: where points are dropped, only the points
@@ -57,7 +81,7 @@ def _far_components(points, laplacian, components, place):
             raise ValueError(
                 f"{place}: the point cloud has {n_components} connected components (points "
                 "far from each other for the cloud's sampling); pass components='largest' "
-                "to keep the one of largest area"
+                "to keep the one of most points"
             )
         operators, area = {}, np.zeros(n_components)
         for label in range(n_components):
@@ -71,7 +95,7 @@ def _far_components(points, laplacian, components, place):
                 f"{place}: the point cloud falls apart into {n_components} groups of fewer "
                 f"than {MIN_POINTS} points far from each other"
             )
-        kept, n_other, share = _largest(labels, area)
+        kept, n_other, share = _largest(labels, area, np.bincount(labels))
         operator = operators[int(labels[np.argmax(kept)])]
     knn = knn if kept.all() else nearest_within(points, knn, kept, LOCAL_NEIGHBORS)
     alone = sparse_outliers(points[kept], knn)  # a mask over the kept points
@@ -117,8 +141,9 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
        line, are refused (a ``ValueError`` naming the sample);
     2. points far from the rest for the cloud's own sampling (a stray point, a small
        far cluster: :func:`.graph.neighbourhood_components`) are other components, as
-       a mesh's: ``components="largest"`` keeps the one of largest area (the mass of
-       its own operator; ties: the lowest), ``"error"`` raises; so are, each alone, the
+       a mesh's: ``components="largest"`` keeps the one of most points (ties: the
+       largest area, the mass of its own operator; then the lowest), ``"error"``
+       raises; so are, each alone, the
        outliers of the kept points (points off the surface for the sampling around
        them, nearer than the far ones: :func:`.graph.sparse_outliers`);
     3. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
@@ -139,7 +164,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     n_input = len(points)
     order = canonical_order(points)
     canonical = unit[order]
-    representative = weld_vertices(canonical, WELD_RTOL if weld else 0.0)
+    representative = weld_vertices(canonical, _weld_rtol(canonical) if weld else 0.0)
     distinct = np.flatnonzero(representative == np.arange(n_input))
     if len(distinct) < MIN_POINTS:
         raise ValueError(

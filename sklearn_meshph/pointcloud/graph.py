@@ -30,6 +30,7 @@ __all__ = [
     "knn_graph",
     "nearest",
     "neighbourhood_components",
+    "refuse_coincident",
     "sparse_outliers",
     "surface_graph",
     "unique_edges",
@@ -84,7 +85,20 @@ def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndar
     return unique_edges(np.repeat(order, indices.shape[1]), order[indices.ravel()], n)
 
 
-def surface_graph(points: np.ndarray) -> np.ndarray:
+def refuse_coincident(points: np.ndarray, place: str) -> None:
+    """A ``ValueError`` naming the sample when some points are equal: the local
+    triangulations need distinct points (the eigen stage merges them; a function given
+    the points themselves does not choose which of two values a merged point keeps)."""
+    n_equal = len(points) - len(np.unique(points + 0.0, axis=0))  # +0.0: -0.0 is 0.0
+    if n_equal:
+        raise ValueError(
+            f"{place}: {n_equal} of the point cloud's points are equal to others; the "
+            "local triangulations need distinct points (LaplacianEigenTransformer "
+            "merges them into ScalarFields)"
+        )
+
+
+def surface_graph(points: np.ndarray, place: str = "point cloud") -> np.ndarray:
     """Edges ``(m, 2)`` (``a < b``, sorted, each once) of the cloud's local triangles.
 
     The triangles of :func:`._triangulation.tangent_fans` (those the ``"cotangent"``
@@ -92,11 +106,13 @@ def surface_graph(points: np.ndarray) -> np.ndarray:
     renumbered: the same edges at any scale float64 holds, and a permuted cloud gives
     the permuted edges. A point in no triangle (its neighbours on its own sheet too few
     or on a line) has no edge: it is a component of its own, as an unreferenced vertex
-    of a mesh is.
+    of a mesh is. Equal points are refused (:func:`refuse_coincident`, naming
+    ``place``).
     """
     points = np.asarray(points, dtype=np.float64)
     if len(points) < 3:
         return np.empty((0, 2), dtype=np.int64)
+    refuse_coincident(points, place)
     order = canonical_order(points)
     triangles = tangent_fans(unit_box(points[order])[0])[0]
     a = order[triangles[:, [0, 1, 2]].ravel()]

@@ -28,7 +28,7 @@ from ..mesh import unit_box, unit_box_mass
 from ..mesh.graph_laplacians import from_combinatorial, normalized_laplacian, random_walk_laplacian
 from ..mesh.validation import check_vertices
 from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
-from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph
+from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph, refuse_coincident
 from .validation import MIN_POINTS
 
 __all__ = [
@@ -72,7 +72,7 @@ def point_cloud_laplacian(
     Raises
     ------
     ValueError
-        Fewer than ``MIN_POINTS`` points, or areas float64 cannot hold at the points'
+        Fewer than ``MIN_POINTS`` points, equal points, or areas float64 cannot hold at the points'
         scale (coordinates beyond about 1e154 or below 1e-154): the operator is built
         in the unit box and its mass scaled back, so any other scale gives the same
         stiffness and the mass times the scale squared.
@@ -116,6 +116,7 @@ def point_cloud_laplacian(
         raise ValueError(
             f"points: a point cloud needs at least {MIN_POINTS} points, got {len(points)}"
         )
+    refuse_coincident(points, "points")
     # In the unit box, as the eigen stage builds it: the same operator at any scale
     # (the stiffness is scale-free, the mass scaled back).
     unit, scale = unit_box(points)

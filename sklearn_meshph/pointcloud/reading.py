@@ -33,6 +33,11 @@ MAX_TEXT_SIZE = 512 * 1024**2
 
 _BLOCK = 4096  # lines parsed at a time
 
+#: Longest line read, in bytes: thousands of numbers, far more than a point's columns.
+#: A longer line (a file with carriage returns only for line ends, or junk) is refused
+#: before it is held in memory.
+MAX_LINE_LENGTH = 64 * 1024
+
 
 @contextlib.contextmanager
 def _data_lines(path: str, compression, place: str):
@@ -43,8 +48,20 @@ def _data_lines(path: str, compression, place: str):
         stream = LimitedReader(path, compression, place, MAX_TEXT_SIZE, "point cloud file")
 
     def lines():
-        for number, line in enumerate(stream, start=1):
+        number = 0
+        while line := stream.readline(MAX_LINE_LENGTH + 1):
+            number += 1
+            if len(line) > MAX_LINE_LENGTH:
+                raise ValueError(
+                    f"{place}: cannot read point cloud file {path!r}: line {number} is "
+                    f"longer than {MAX_LINE_LENGTH} bytes (line ends other than \\n?)"
+                )
             text = line.split(b"#", 1)[0].strip()
+            if b"\r" in text:
+                raise ValueError(
+                    f"{place}: cannot read point cloud file {path!r}: line {number} holds "
+                    "carriage returns: its lines must end with \\n (or \\r\\n)"
+                )
             if text:
                 yield number, text
 
@@ -63,16 +80,15 @@ def _parse_block(block, width: int, path: str, place: str) -> np.ndarray:
         table = None
     if table is not None and table.shape[1] == width:
         return table
-    for number, text in block:
-        fields = text.split()
+    for number, text in block:  # the line to name: each parsed alone, as the block was
         try:
-            [float(f) for f in fields]
+            row = np.loadtxt([text.decode("latin-1")], ndmin=2)
         except ValueError:
             reason = "holds something other than numbers"
         else:
-            if len(fields) == width:
+            if row.shape[1] == width:
                 continue
-            reason = f"holds {len(fields)} numbers where the first point has {width}"
+            reason = f"holds {row.shape[1]} numbers where the first point has {width}"
         raise ValueError(f"{place}: cannot read point cloud file {path!r}: line {number} {reason}")
     raise ValueError(f"{place}: cannot read point cloud file {path!r}")  # not reached
 
@@ -89,7 +105,8 @@ def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
-        raise ValueError(f"{place}: point cloud file {path!r} does not exist")
+        problem = "is not a regular file" if os.path.lexists(path) else "does not exist"
+        raise ValueError(f"{place}: point cloud file {path!r} {problem}")
     _, compression = split_compression(path)
     if compression is None and os.path.getsize(path) > MAX_TEXT_SIZE:
         raise ValueError(
@@ -117,8 +134,15 @@ def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
     with _data_lines(path, compression, place) as lines:
         kept = (item for item in lines if item[0] != skip)
         while block := list(itertools.islice(kept, _BLOCK)):
+            if filled + len(block) > n_points:
+                break
             points[filled : filled + len(block)] = _parse_block(block, width, path, place)[:, :3]
             filled += len(block)
+    if filled != n_points:
+        raise ValueError(
+            f"{place}: point cloud file {path!r} changed while it was read ({n_points} "
+            "points counted, then another number)"
+        )
     return points
 
 
