@@ -440,9 +440,25 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
 
     def _combine(self, matrices):
         total = np.zeros(np.shape(matrices[0]))
+        finite = np.ones(total.shape, dtype=bool)  # where no part is infinite itself
         for (name, _), matrix in zip(self.parts_, matrices, strict=True):
-            if self.weights_[name] > 0:  # 0 * inf would be NaN: a weight-0 part is left out
-                total += self.weights_[name] / self.scales_[name] * np.asarray(matrix, float)
+            weight = self.weights_[name]
+            if weight > 0:  # 0 * inf would be NaN: a weight-0 part is left out
+                factor = weight / self.scales_[name]
+                if not np.isfinite(factor):
+                    raise ValueError(
+                        f"weights: part {name!r}'s weight {weight!r} over its scale "
+                        f"{self.scales_[name]:.3g} overflows float64; use smaller weights"
+                    )
+                matrix = np.asarray(matrix, float)
+                with np.errstate(over="ignore"):
+                    total += factor * matrix
+                finite &= np.isfinite(matrix)
+        if not np.isfinite(total[finite]).all():
+            raise ValueError(
+                "weights: the weighted sum of the parts' distances overflows float64; use "
+                "smaller weights"
+            )
         return total
 
     def fit_transform(self, X, y=None):

@@ -229,3 +229,12 @@ def test_feature_names_and_pandas_output_of_vector_distances():
         assert list(frame.columns) == [f"{prefix}{i}" for i in range(5)]
         assert list(estimator.get_feature_names_out()) == list(frame.columns)
         assert list(estimator.transform(X[:2]).columns) == list(frame.columns)
+
+
+def test_weights_that_overflow_are_refused():
+    from sklearn_meshph import CombinedDistance, DiagramDistance
+
+    diagrams = [np.array([[0.0, 1.0]]), np.array([[0.0, 2.0], [1.0, 1.5]]), np.array([[0.2, 3.0]])]
+    parts = [("a", DiagramDistance()), ("b", DiagramDistance(metric="sliced-wasserstein"))]
+    with pytest.raises(ValueError, match="weighted sum of the parts' distances overflows"):
+        CombinedDistance(parts, weights=(1e308, 1e308)).fit_transform(diagrams)

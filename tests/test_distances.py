@@ -312,3 +312,20 @@ def test_equal_diagrams_are_at_distance_exactly_zero():
         assert distance(a, a) == 0.0
         assert distance(a, a[::-1]) == 0.0
         assert distance(a, a[[1, 0, 2]]) == 0.0
+
+
+def test_values_whose_differences_overflow_are_refused_not_solved():
+    # 1e308 - (-1e308) is infinite: the Wasserstein solver crashed the process on it.
+    from sklearn_meshph import DiagramDistance, wasserstein_distance
+    from sklearn_meshph.diagrams.validation import MAX_DIAGRAM_VALUE
+
+    a = np.array([[0.5, 0.9], [0.7, 1.0]])
+    b = np.array([[0.0, 1e308], [-1e308, 1e308]])
+    with pytest.raises(ValueError, match=r"sample 1, diagram 0: row 0 holds 1e\+308, beyond"):
+        DiagramDistance(metric="wasserstein").fit_transform([(a,), (b,)])
+    with pytest.raises(ValueError, match=r"row 0 holds 1e\+308"):
+        wasserstein_distance(a, b)
+    with pytest.raises(ValueError, match=r"sample 1: a diagram must be real"):
+        DiagramDistance().fit_transform([a, a.astype(complex)])
+    edge = np.array([[0.0, MAX_DIAGRAM_VALUE], [-MAX_DIAGRAM_VALUE, MAX_DIAGRAM_VALUE]])
+    assert np.isfinite(wasserstein_distance(a, edge))

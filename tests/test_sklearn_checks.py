@@ -176,3 +176,19 @@ def test_every_estimator_of_samples_accepts_set_output(estimator):
     assert clone(estimator)._sklearn_output_config == {"transform": "pandas"}
     with pytest.raises(ValueError, match="transform must be one of"):
         estimator.set_output(transform="table")
+
+
+def test_predictions_before_fit_raise_not_fitted():
+    import numpy as np
+    from sklearn.exceptions import NotFittedError
+
+    from sklearn_meshph import GraphPairDistances, KernelSumSVC, ShapeNeighborsClassifier
+
+    stack = np.zeros((2, 2, 3))
+    for method in ("predict", "decision_function", "score"):
+        args = (stack, [0, 1]) if method == "score" else (stack,)
+        with pytest.raises(NotFittedError):
+            getattr(KernelSumSVC(groups="graph"), method)(*args)
+    with pytest.raises(NotFittedError):
+        ShapeNeighborsClassifier().predict([np.zeros((4, 3))])
+    assert GraphPairDistances().__sklearn_tags__().requires_fit

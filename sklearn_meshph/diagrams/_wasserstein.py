@@ -127,6 +127,8 @@ def transport(a, b, order, internal_p):
             largest = max(largest, (d[i, 1] - d[i, 0]) / 2.0 * factor)
     if largest == 0.0:  # every point on the diagonal
         return 0.0, 0.0, np.full(len(a), DIAGONAL, np.int64)
+    if not np.isfinite(largest):  # the checks refuse such values; never solve with them
+        raise ValueError("a diagram's persistence overflows float64")
     scale = power_of_two_above(largest)
     if order == 1.0 or order == 2.0:
         # Orders 1 and 2 keep the bits of the unscaled computation (scaling by a power

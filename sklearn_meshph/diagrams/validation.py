@@ -13,21 +13,31 @@ from .._base import as_sample_list
 __all__ = ["Packed", "check_diagram", "check_sample", "check_samples", "pack_samples"]
 
 
+#: Largest magnitude of a finite birth or death (2**1022, about 4.5e307): the difference
+#: of any two is then finite, as every distance's costs need (beyond it a persistence
+#: of ``1e308 - (-1e308)`` was infinite, and the Wasserstein solver crashed on it).
+MAX_DIAGRAM_VALUE = 2.0**1022
+
+
 def check_diagram(diagram, *, index: int | None = None, part: int | None = None) -> np.ndarray:
     """Validate one diagram and return it as a float64 array of shape (n, 2).
 
     Rows are (birth, death) with a finite birth and ``death >= birth``; death may be
-    ``+inf`` (an essential class). An empty diagram (no rows) is valid.
+    ``+inf`` (an essential class). Finite values are at most :data:`MAX_DIAGRAM_VALUE`
+    in magnitude. An empty diagram (no rows) is valid.
 
     Raises
     ------
     ValueError
         Naming the sample (and the diagram within it) and the problem: wrong shape,
-        non-numeric, NaN, infinite birth, death below birth.
+        non-numeric, complex, NaN, infinite birth, death below birth, a value beyond
+        :data:`MAX_DIAGRAM_VALUE`.
     """
     where = "diagram" if index is None else f"sample {index}"
     if part is not None:
         where += f", diagram {part}"
+    if isinstance(diagram, np.ndarray) and np.iscomplexobj(diagram):
+        raise ValueError(f"{where}: a diagram must be real, got complex values")
     try:
         array = np.asarray(diagram, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -46,6 +56,14 @@ def check_diagram(diagram, *, index: int | None = None, part: int | None = None)
         row = int(np.flatnonzero(array[:, 1] < array[:, 0])[0])
         raise ValueError(
             f"{where}: row {row} has death {array[row, 1]} below birth {array[row, 0]}"
+        )
+    huge = (np.abs(array) > MAX_DIAGRAM_VALUE) & np.isfinite(array)
+    if huge.any():
+        row = int(np.flatnonzero(huge.any(axis=1))[0])
+        raise ValueError(
+            f"{where}: row {row} holds {float(array[row][huge[row]][0])!r}, beyond the largest "
+            f"finite value a diagram may hold, {MAX_DIAGRAM_VALUE:.3g} (MAX_DIAGRAM_VALUE: "
+            "differences of larger values overflow); scale the function down"
         )
     return array
 
@@ -176,6 +194,8 @@ def pack_samples(X, n_diagrams: int | None = None) -> Packed:
             if _is_diagram_array(diagram):
                 arrays.append(diagram)
                 continue
+            if isinstance(diagram, np.ndarray) and np.iscomplexobj(diagram):
+                check_diagram(diagram, index=i, part=k if tuples[-1] else None)  # raises
             try:
                 array = np.asarray(diagram, dtype=np.float64)
             except (TypeError, ValueError):
@@ -192,6 +212,7 @@ def pack_samples(X, n_diagrams: int | None = None) -> Packed:
     with np.errstate(invalid="ignore"):
         bad = np.isnan(points).any(axis=1) | ~np.isfinite(points[:, 0])
         bad |= points[:, 1] < points[:, 0]
+        bad |= ((np.abs(points) > MAX_DIAGRAM_VALUE) & np.isfinite(points)).any(axis=1)
     if bad.any():
         flat = int(np.searchsorted(packed.offsets, np.flatnonzero(bad)[0], side="right") - 1)
         i, k = divmod(flat, count)

@@ -533,4 +533,5 @@ class ShapeNeighborsClassifier(ClassifierScoreMixin, _ShapeIndex):
         ndarray of shape (n_samples,)
             Labels of ``classes_``; a tied vote gives the first of them.
         """
-        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+        proba = self.predict_proba(X)  # checks that the classifier is fitted first
+        return self.classes_[np.argmax(proba, axis=1)]

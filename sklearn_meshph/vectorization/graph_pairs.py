@@ -201,6 +201,7 @@ class GraphPairDistances(SampleTransformer):
     """
 
     _sample_kind = "graph fields"
+    _requires_fit = True  # transform needs the fitted graphs and scales
     _parameter_constraints = {
         "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
         "min_persistence": [Interval(Real, 0, None, closed="left")],

@@ -252,7 +252,8 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         """The SVM's decision function of the samples whose distances to the training
         samples are ``X``, of shape ``(n_samples, n_fitted, n_positions)`` (or a
         matrix)."""
-        return self.svc_.decision_function(self._kernel(X))
+        kernel = self._kernel(X)  # checks that the classifier is fitted first
+        return self.svc_.decision_function(kernel)
 
     def predict(self, X):
         """The classes of the samples whose distances to the training samples are ``X``.
@@ -265,4 +266,5 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         -------
         ndarray of shape (n_samples,)
         """
-        return self.svc_.predict(self._kernel(X))
+        kernel = self._kernel(X)  # checks that the classifier is fitted first
+        return self.svc_.predict(kernel)
