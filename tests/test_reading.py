@@ -3,7 +3,10 @@
 import bz2
 import gzip
 import lzma
+import os
 import struct
+import subprocess
+import sys
 import time
 import tracemalloc
 import zlib
@@ -496,3 +499,17 @@ def test_text_point_cloud_that_changes_between_the_passes_is_refused(tmp_path, m
     monkeypatch.setattr(reading, "_data_lines", shrinking)
     with pytest.raises(ValueError, match=r"changed while it was read \(500 points counted"):
         reading.read_point_cloud_file(path)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_files_a_mesh_names_beside_it_are_never_read(tmp_path):
+    # An OBJ's mtllib naming a FIFO hung trimesh, which followed it from the path.
+    os.mkfifo(tmp_path / "trap.mtl")
+    evil = tmp_path / "evil.obj"
+    evil.write_text("mtllib trap.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n")
+    code = (
+        "from sklearn_meshph.mesh.reading import read_mesh_file; "
+        f"print(len(read_mesh_file({str(evil)!r}).faces))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
+    assert done.stdout.split() == [b"2"], done.stderr.decode()[-2000:]

@@ -153,8 +153,10 @@ def read_mesh_file(
     place : str, default="mesh"
         Names the sample in error messages, which also name the file.
     max_decompressed_size : int, optional
-        Largest decompressed size of a compressed file, in bytes; default
-        ``MAX_DECOMPRESSED_SIZE``. Decompression stops there.
+        Largest size of the file, decompressed if it is compressed, in bytes; default
+        ``MAX_DECOMPRESSED_SIZE``. Decompression stops there. Files the mesh file
+        names (an OBJ's materials and textures, a GLB's external buffers) are never
+        read.
     allow_points : bool, default=False
         Return a file of vertices without triangles (a point cloud, such as a PLY
         without faces) as a ``trimesh.PointCloud`` instead of refusing it.
@@ -192,12 +194,20 @@ def read_mesh_file(
             f"{', '.join('.' + f for f in MESH_FORMATS)} (each possibly .gz, .bz2 or .xz); "
             "archives and containers are refused"
         )
+    limit = MAX_DECOMPRESSED_SIZE if max_decompressed_size is None else max_decompressed_size
     if compression is None:
+        if os.path.getsize(path) > limit:
+            raise ValueError(
+                f"{place}: mesh file {path!r} is larger than {int(limit)} bytes (the limit, "
+                "MAX_DECOMPRESSED_SIZE); refusing to parse it"
+            )
+        # trimesh is given the bytes, never the path: from a path it follows what the
+        # file names beside it (an OBJ's mtllib and textures, a PLY's TextureFile, a
+        # GLB's buffer uri), and a FIFO or a huge file named there hung or was read.
         with open(path, "rb") as stream:
-            head = stream.read(4)
-        source = path
+            source = io.BytesIO(stream.read())
+        head = bytes(source.getbuffer()[:4])
     else:
-        limit = MAX_DECOMPRESSED_SIZE if max_decompressed_size is None else max_decompressed_size
         source = decompress(path, compression, place, int(limit))
         if source.getbuffer().nbytes == 0:
             raise ValueError(
