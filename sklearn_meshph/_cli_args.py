@@ -285,8 +285,13 @@ def check_output(output: Path) -> None:
 
 def check_folds(y, class_names, folds: int, neighbors: int, random_state) -> None:
     """Every class at least ``folds`` samples, and ``neighbors`` at most the smallest
-    training fold of the stratified split."""
+    training fold of the stratified split; at least two classes."""
     counts = np.bincount(y, minlength=len(class_names))
+    if np.count_nonzero(counts) < 2:
+        raise UsageError(
+            f"the data holds one class ({class_names[int(np.argmax(counts))]!r}): there is "
+            "nothing to classify; give a folder with one sub-folder per class (at least two)"
+        )
     small = [(str(n), int(c)) for n, c in zip(class_names, counts, strict=True) if c < folds]
     if small:
         listed = ", ".join(f"{n!r} ({c})" for n, c in small[:5]) + (

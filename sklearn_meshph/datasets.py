@@ -163,7 +163,8 @@ def load_mesh_folder(
     """
     root = Path(path)
     if not root.is_dir():
-        raise ValueError(f"mesh folder {os.fspath(path)!r} does not exist")
+        problem = "is not a folder" if os.path.lexists(path) else "does not exist"
+        raise ValueError(f"mesh folder {os.fspath(path)!r} {problem}")
     endings = tuple(e.lower() for e in extensions)
     classes = sorted(d for d in root.iterdir() if d.is_dir() and not d.name.startswith(("_", ".")))
     names, filenames, target = [], [], []

@@ -223,6 +223,8 @@ TAMPERED_HEADERS = {
     "no edge count": lambda h: {k: v for k, v in h.items() if k != "n_edges"},
     "a negative edge count": lambda h: {**h, "n_edges": -1},
     "edges for a mesh": lambda h: {**h, "n_edges": 1},
+    # A 401-digit integer: OverflowError (not a ValueError) once made a float.
+    "a huge share": lambda h: {**h, "report": {**h["report"], "vertex_share": 10**400}},
 }
 
 
@@ -253,6 +255,18 @@ def test_json_constants_in_a_header_are_refused(tmp_path, constant, where):
         again = solve(tmp_path)
     np.testing.assert_array_equal(again.values, first.values)
     assert again.cleaning == first.cleaning
+
+
+def test_an_array_whose_size_overflows_is_recomputed(tmp_path):
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    with open(entry / "vectors.npy", "wb") as stream:  # 2**63 values: beyond int64
+        np.lib.format.write_array_header_1_0(
+            stream, {"descr": "<f8", "fortran_order": False, "shape": (2**62, 2)}
+        )
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
 
 
 def test_a_deeply_nested_header_is_recomputed(tmp_path):

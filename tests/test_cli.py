@@ -91,6 +91,13 @@ def test_small_class_is_refused_before_loading(tmp_path, capfd, monkeypatch):
     assert "--folds 3" in line and "class_with_a_rather_long_name_00" in line
 
 
+def test_a_single_class_is_refused(tmp_path, capfd):
+    # It printed "accuracy: 1.000" and exited 0.
+    _write_classes(tmp_path / "data", 1, 3)
+    assert main([str(tmp_path / "data"), "--folds", "3", "--output", str(tmp_path / "o")]) == 2
+    assert "holds one class ('class_with_a_rather_long_name_00')" in _one_error_line(capfd)
+
+
 @pytest.fixture
 def no_computation(monkeypatch):
     """Any sample generated, loaded or solved fails the test."""

@@ -513,3 +513,16 @@ def test_files_a_mesh_names_beside_it_are_never_read(tmp_path):
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=120)
     assert done.stdout.split() == [b"2"], done.stderr.decode()[-2000:]
+
+
+def test_what_is_not_a_mesh_file_or_folder_is_named(tmp_path):
+    (tmp_path / "folder.off").mkdir()
+    with pytest.raises(ValueError, match=r"folder\.off' is a directory"):
+        read_mesh_file(tmp_path / "folder.off")
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(tmp_path / "pipe.off")
+        with pytest.raises(ValueError, match=r"pipe\.off' is not a regular file"):
+            read_mesh_file(tmp_path / "pipe.off")
+    (tmp_path / "plain.txt").write_text("not a folder")
+    with pytest.raises(ValueError, match=r"plain\.txt' is not a folder"):
+        load_mesh_folder(tmp_path / "plain.txt")

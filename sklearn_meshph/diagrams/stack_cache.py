@@ -65,6 +65,11 @@ class StackCache:
             is_folder = stat.S_ISDIR(os.stat(location).st_mode)
         except FileNotFoundError:  # made at the first store
             is_folder = True
+        except OSError as error:  # a file on the way, a name too long...
+            raise ValueError(
+                f"memory must be a folder, a joblib.Memory or None; {os.fspath(location)!r} "
+                f"cannot be one: {error}"
+            ) from error
         if not is_folder:
             raise ValueError(
                 f"memory must be a folder, a joblib.Memory or None; {os.fspath(location)!r} "
@@ -106,7 +111,7 @@ class StackCache:
             if not stat.S_ISREG(mode):
                 raise ValueError("not a regular file")
             return _read(entry, tuple(shape), np.dtype(dtype))
-        except (OSError, ValueError, SyntaxError) as error:
+        except (OSError, ValueError, SyntaxError, OverflowError) as error:
             return _unusable(entry, error)
 
     def store(self, key: str, stack: np.ndarray) -> None:

@@ -180,7 +180,8 @@ def read_mesh_file(
     if os.path.isdir(path):
         raise ValueError(f"{place}: mesh file {path!r} is a directory, not a file")
     if not os.path.isfile(path):
-        raise ValueError(f"{place}: mesh file {path!r} does not exist")
+        problem = "is not a regular file" if os.path.lexists(path) else "does not exist"
+        raise ValueError(f"{place}: mesh file {path!r} {problem}")
     if os.path.getsize(path) == 0:
         raise ValueError(f"{place}: mesh file {path!r} is empty, not a valid mesh")
     file_type, compression = split_compression(path)

@@ -262,7 +262,7 @@ class EigenCache:
             return None
         try:
             return self._read(entry, key, n_input, max_pairs, points, graph)
-        except (OSError, ValueError, KeyError, TypeError, RecursionError) as error:
+        except (OSError, ValueError, KeyError, TypeError, RecursionError, OverflowError) as error:
             warnings.warn(
                 f"eigen cache entry {entry} is unusable and is recomputed: {error}",
                 CacheWarning,
