@@ -63,7 +63,7 @@ def check_diagram(diagram, *, index: int | None = None, part: int | None = None)
         raise ValueError(
             f"{where}: row {row} holds {float(array[row][huge[row]][0])!r}, beyond the largest "
             f"finite value a diagram may hold, {MAX_DIAGRAM_VALUE:.3g} (MAX_DIAGRAM_VALUE: "
-            "differences of larger values overflow); scale the function down"
+            "differences of larger values overflow); rescale the diagrams"
         )
     return array
 
