@@ -530,7 +530,8 @@ def sample_point_cloud(
     if not (np.isfinite(areas.sum()) and areas.sum() > 0):
         # Coordinates near float's limits: the areas over- or underflow, their ratios
         # (all that the draw uses) do not with the coordinates scaled to at most 1.
-        areas = _areas(corners / np.abs(vertices).max())
+        largest = np.abs(vertices).max()
+        areas = _areas(corners / largest) if largest > 0 else areas
     if not areas.sum() > 0:
         raise ValueError("mesh: the surface has no area to sample")
     weights = areas if density == 1 else _uneven(corners, areas, density, rng)
