@@ -193,6 +193,9 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # the exit's own flush must not fail again
         return 0
+    except KeyboardInterrupt:  # Ctrl-C: one line, not the traceback of wherever it was
+        print("interrupted", file=sys.stderr)
+        return 130
     return status
 
 

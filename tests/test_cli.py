@@ -579,3 +579,14 @@ def test_pictures_say_what_they_show(tmp_path, monkeypatch):
     paper = [*argv, "--preset", "paper", "--no-plots"]
     assert main([*paper[:-1], "--output", str(tmp_path / "b")]) == 0
     assert labels == ["eigenfunction 1"] * 6
+
+
+def test_ctrl_c_ends_with_one_line(monkeypatch, capfd):
+    import sklearn_meshph.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_run", interrupted)
+    assert main(["--no-plots"]) == 130
+    assert capfd.readouterr().err == "interrupted\n"
