@@ -13,9 +13,10 @@ from .._base import as_sample_list
 __all__ = ["Packed", "check_diagram", "check_sample", "check_samples", "pack_samples"]
 
 
-#: Largest magnitude of a finite birth or death (2**1022, about 4.5e307): the difference
-#: of any two is then finite, as every distance's costs need (beyond it a persistence
-#: of ``1e308 - (-1e308)`` was infinite, and the Wasserstein solver crashed on it).
+#: Largest magnitude of a finite birth or death (2**1022, about 4.5e307): the sum or
+#: difference of any two is then finite, as every distance's costs and every
+#: vectorization's persistence and midpoints need (beyond it a persistence of
+#: ``1e308 - (-1e308)`` was infinite, and the Wasserstein solver crashed on it).
 MAX_DIAGRAM_VALUE = 2.0**1022
 
 

@@ -50,8 +50,6 @@ INFINITE_POLICIES = ("drop", "clip", "error")
 _TINY = float(np.finfo(np.float64).tiny)
 #: The bandwidths whose square, and the peak of whose 2-d Gaussian, are normal floats.
 _BANDWIDTHS = (float(np.sqrt(_TINY)), float(np.sqrt(1.0 / (2.0 * np.pi * _TINY))))
-#: Coordinates beyond this cannot be added or subtracted without overflow.
-_LARGEST_COORDINATE = float(np.finfo(np.float64).max / 4)
 
 #: The constraint of every ``bandwidth``: neither so small that its square underflows
 #: nor so large that the Gaussian's peak does (an image or kernel of silent zeros).
@@ -305,7 +303,7 @@ class PolicyTransformer(DiagramTransformer):
         death, else its largest birth) and apply the ``infinite`` policy."""
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         SampleTransformer.fit(self, X)
-        packed = _checked_magnitude(pack_samples(X))
+        packed = pack_samples(X)  # refuses values whose sums overflow
         self.n_diagrams_ = packed.n_diagrams
         self.clip_values_ = np.array(
             [_clip_value(packed.only(k).points) for k in range(packed.n_diagrams)]
@@ -315,7 +313,7 @@ class PolicyTransformer(DiagramTransformer):
     def _validate(self, X) -> Packed:
         """Validate ``X`` against the fitted data and apply the ``infinite`` policy."""
         check_is_fitted(self, "n_diagrams_")
-        packed = _checked_magnitude(pack_samples(X, n_diagrams=self.n_diagrams_))
+        packed = pack_samples(X, n_diagrams=self.n_diagrams_)
         return apply_infinite(packed, self._infinite_policy(), self.clip_values_)
 
 
@@ -339,20 +337,6 @@ def _clip_value(points: np.ndarray) -> float:
     if len(deaths):
         return float(deaths.max())
     return float(points[:, 0].max()) if len(points) else -np.inf
-
-
-def _checked_magnitude(packed: Packed) -> Packed:
-    """``packed``, refused when a finite coordinate is too large to add or subtract."""
-    with np.errstate(invalid="ignore"):
-        large = (np.abs(packed.points) > _LARGEST_COORDINATE) & np.isfinite(packed.points)
-    if large.any():
-        row = int(np.flatnonzero(large.any(axis=1))[0])
-        raise ValueError(
-            f"{packed.where(row)} has a coordinate beyond a quarter of the largest float64 "
-            f"({packed.points[row].tolist()}): its persistence or midpoint would overflow; "
-            "rescale the diagrams"
-        )
-    return packed
 
 
 def apply_infinite(packed: Packed, policy: str, clip_values=None) -> Packed:
