@@ -103,6 +103,7 @@ def sphere_points(n=1500, seed=0):
     [
         np.array([[1e9, 0.0, 0.0]]),  # welded the surface into 14 points
         np.array([[1e10, 0.0, 0.0]]),  # "2 distinct points"
+        np.array([[1e15, 0.0, 0.0]]),  # "its 1501 distinct points lie on one line"
         np.random.default_rng(3).normal(size=(75, 3)) * 1e10,  # the 75 were kept
     ],
 )

@@ -32,6 +32,17 @@ def _refuse_degenerate(points: np.ndarray, place: str) -> None:
         )
 
 
+def _within_fences(points: np.ndarray) -> np.ndarray:
+    """The points within Tukey's fences (three interquartile ranges beyond the
+    quartiles, per coordinate): far points are not dropped yet when the cloud is tested
+    for lying on a line, and one outlier 1e15 times the shape's size away would make
+    any shape a line."""
+    low, high = np.percentile(points, [25, 75], axis=0)
+    reach = 3.0 * (high - low)
+    inside = np.all((points >= low - reach) & (points <= high + reach), axis=1)
+    return points[inside] if np.count_nonzero(inside) >= MIN_POINTS else points
+
+
 def _weld_rtol(points: np.ndarray) -> float:
     """``WELD_RTOL`` of the surface's extent, as a fraction of the whole box's diagonal.
 
@@ -171,7 +182,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
             f"{place}: the point cloud has {len(distinct)} distinct points; at least "
             f"{MIN_POINTS} are needed"
         )
-    _refuse_degenerate(canonical[distinct], place)
+    _refuse_degenerate(_within_fences(canonical[distinct]), place)
     near, L, M, triangles, n_far, far_share = _far_components(
         canonical[distinct], laplacian, components, place
     )
