@@ -329,3 +329,36 @@ def test_values_whose_differences_overflow_are_refused_not_solved():
         DiagramDistance().fit_transform([a, a.astype(complex)])
     edge = np.array([[0.0, MAX_DIAGRAM_VALUE], [-MAX_DIAGRAM_VALUE, MAX_DIAGRAM_VALUE]])
     assert np.isfinite(wasserstein_distance(a, edge))
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    a=diagrams(tied=True),
+    b=diagrams(tied=True),
+    exponent=st.sampled_from([-1060, -1030, -1000, -900, 0, 900]),
+    order=st.sampled_from([1.0, 2.0, 3.0]),
+)
+def test_wasserstein_scales_with_dyadic_diagrams_down_to_subnormals(a, b, exponent, order):
+    """Found by hypothesis: a diagram of subnormal persistence gave NaN (and one point
+    ``inf``), since ``1 / s`` overflowed. On a grid of quarters, scaling by a power of
+    two is exact down to the subnormals, and so must the distance be (to rounding)."""
+    s = 2.0**exponent
+    expected = wasserstein_distance(a, b, order=order)
+    scaled, matched = wasserstein_distance(a * s, b * s, order=order, matching=True)
+    assert np.isfinite(scaled)
+    assert scaled == pytest.approx(expected * s, rel=1e-9, abs=0.0)
+    costs = matching_cost(a, b, matched, order)  # the matching found is optimal unscaled
+    assert (costs**order).sum() ** (1 / order) == pytest.approx(expected, rel=1e-9)
+    assert bottleneck_distance(a * s, b * s) == bottleneck_distance(a, b) * s
+
+
+def test_subnormal_persistence_has_a_finite_wasserstein_distance():
+    empty = np.zeros((0, 2))
+    tiny = np.array([[0.0, 0.0], [0.0, 2.2e-311]])
+    assert wasserstein_distance(tiny, empty) == 1.1e-311
+    assert wasserstein_distance(tiny[1:], empty) == 1.1e-311
+    # A point on the diagonal far away is left out, not magnified into overflow.
+    far = np.array([[5.0, 5.0], [0.0, 2.2e-311]])
+    assert wasserstein_distance(far, np.array([[0.0, 1e-311], [7.0, 7.0]])) == 1.2e-311
+    matrix = pairwise_diagram_distances([tiny, far, empty], metric="wasserstein")
+    assert np.isfinite(matrix).all() and matrix[0, 2] == 1.1e-311

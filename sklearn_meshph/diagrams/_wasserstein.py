@@ -26,6 +26,10 @@ from ._pricing import sparse_solve
 
 # A scaled optimum below this is solved again at the scale of the bottleneck distance.
 _TINY = 1e-250
+# Below this largest persistence, ``1 / s`` may overflow (subnormal persistence): such
+# diagrams are solved magnified by ``2^_MAGNIFY`` (exact for them).
+_SMALLEST_SCALE = 2.0**-1000
+_MAGNIFY = 1000
 # Above this many point pairs, each point starts with its nearest neighbours only and
 # the edges the optimum needs are added by pricing (benchmarks/bench_distances.py).
 DENSE_PAIRS = 90_000
@@ -114,17 +118,67 @@ def _same_points(a, b):
 
 
 @numba.njit(cache=True)
+def _off_diagonal(d):
+    """Indices of the points of ``d`` off the diagonal."""
+    keep = np.empty(len(d), np.int64)
+    n = 0
+    for i in range(len(d)):
+        if d[i, 1] != d[i, 0]:
+            keep[n] = i
+            n += 1
+    return keep[:n]
+
+
+@numba.njit(cache=True)
+def _transport_magnified(a, b, order, internal_p):
+    """:func:`transport` of two diagrams whose persistence is all below
+    ``_SMALLEST_SCALE``, where ``1 / s`` would overflow (subnormal persistence).
+
+    Points on the diagonal are left out (sending them to the diagonal costs nothing, and
+    no matching gains by using them: in every ``l_p`` ground metric a point is at least
+    as far from a diagonal point as from its own projection). The others then have both
+    coordinates below ``2^-948`` in magnitude (a difference below ``2^-1000`` between
+    two floats needs an ulp that small), so multiplying them by ``2^MAGNIFY`` is exact
+    and overflows nothing; the scale comes back divided by it.
+    """
+    keep_a, keep_b = _off_diagonal(a), _off_diagonal(b)
+    up = 2.0**_MAGNIFY
+    scale, total, kept_partner = _transport_normal(a[keep_a] * up, b[keep_b] * up, order, internal_p)
+    partner = np.full(len(a), DIAGONAL, np.int64)
+    for k in range(len(keep_a)):
+        if kept_partner[k] != DIAGONAL:
+            partner[keep_a[k]] = keep_b[kept_partner[k]]
+    return scale * 2.0**-_MAGNIFY, total, partner
+
+
+@numba.njit(cache=True)
+def _largest_to_diagonal(a, b, internal_p):
+    """The largest ground distance of a point of ``a`` or ``b`` to the diagonal."""
+    factor = diagonal_factor(internal_p)
+    largest = 0.0
+    for d in (a, b):
+        for i in range(len(d)):
+            largest = max(largest, (d[i, 1] - d[i, 0]) / 2.0 * factor)
+    return largest
+
+
+@numba.njit(cache=True)
 def transport(a, b, order, internal_p):
     """Optimal matching of two finite diagrams, in scaled form.
 
     Returns ``(s, total, partner)``: the distance is ``s * total^(1/order)`` and
     ``partner`` gives each point of ``a`` its partner in ``b`` or ``DIAGONAL``.
     """
-    factor = diagonal_factor(internal_p)
-    largest = 0.0
-    for d in (a, b):
-        for i in range(len(d)):
-            largest = max(largest, (d[i, 1] - d[i, 0]) / 2.0 * factor)
+    largest = _largest_to_diagonal(a, b, internal_p)
+    if 0.0 < largest < _SMALLEST_SCALE:
+        return _transport_magnified(a, b, order, internal_p)
+    return _transport_normal(a, b, order, internal_p)
+
+
+@numba.njit(cache=True)
+def _transport_normal(a, b, order, internal_p):
+    """:func:`transport` where ``1 / s`` cannot overflow."""
+    largest = _largest_to_diagonal(a, b, internal_p)
     if largest == 0.0:  # every point on the diagonal
         return 0.0, 0.0, np.full(len(a), DIAGONAL, np.int64)
     if not np.isfinite(largest):  # the checks refuse such values; never solve with them
