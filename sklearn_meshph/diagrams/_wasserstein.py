@@ -143,7 +143,9 @@ def _transport_magnified(a, b, order, internal_p):
     """
     keep_a, keep_b = _off_diagonal(a), _off_diagonal(b)
     up = 2.0**_MAGNIFY
-    scale, total, kept_partner = _transport_normal(a[keep_a] * up, b[keep_b] * up, order, internal_p)
+    scale, total, kept_partner = _transport_normal(
+        a[keep_a] * up, b[keep_b] * up, order, internal_p
+    )
     partner = np.full(len(a), DIAGONAL, np.int64)
     for k in range(len(keep_a)):
         if kept_partner[k] != DIAGONAL:
