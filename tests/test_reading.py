@@ -526,3 +526,157 @@ def test_what_is_not_a_mesh_file_or_folder_is_named(tmp_path):
     (tmp_path / "plain.txt").write_text("not a folder")
     with pytest.raises(ValueError, match=r"plain\.txt' is not a folder"):
         load_mesh_folder(tmp_path / "plain.txt")
+
+
+OFF_VARIANTS = {
+    "counts on the keyword's line": "OFF 4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n",
+    "comments and blank lines": (
+        "# made by hand\nOFF\n\n# counts\n4 2 0\n0 0 0 # origin\n1 0 0\n\n0 1 0\n0 0 1\n"
+        "3 0 1 2\n# the second face\n3 0 1 3\n"
+    ),
+    "colours (COFF) and face colours": (
+        "COFF\n4 2 0\n0 0 0 1 0 0 1\n1 0 0 1 0 0 1\n0 1 0 1 0 0 1\n0 0 1 1 0 0 1\n"
+        "3 0 1 2 255 0 0\n3 0 1 3 0 255 0\n"
+    ),
+    "a quad": "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n",
+    "tabs and CRLF": "OFF\r\n4\t2\t0\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n0 0 1\r\n3 0 1 2\r\n3\t0 1 3",
+}
+
+
+@pytest.mark.parametrize("name", sorted(OFF_VARIANTS))
+def test_off_files_read_as_trimesh_reads_them(tmp_path, name):
+    """The OFF reader is ours (trimesh's took up to 40 bytes of memory per byte of
+    file): the same vertices and triangles as trimesh's on what both read."""
+    path = tmp_path / "a.off"
+    path.write_bytes(OFF_VARIANTS[name].encode())
+    ours = read_mesh_file(path)
+    theirs = trimesh.load(path, process=False, force="mesh")
+    np.testing.assert_array_equal(ours.vertices, theirs.vertices)
+    # The same oriented triangles; trimesh groups triangles before quads and starts a
+    # quad's second triangle elsewhere, ours keep the file's order as fans.
+    assert _oriented(ours.faces) == _oriented(theirs.faces)
+    if name != "a quad":
+        np.testing.assert_array_equal(ours.faces, theirs.faces)
+
+
+def _oriented(faces):
+    """Triangles as a sorted list, each rotated to start at its smallest corner."""
+    return sorted(tuple(np.roll(f, -int(np.argmin(f)))) for f in np.asarray(faces))
+
+
+def test_a_pentagon_is_cut_into_a_fan(tmp_path):
+    path = tmp_path / "a.off"
+    path.write_text("NOFF\n5 1 0\n" + "0 0 0 0 0 1\n" * 5 + "5 4 3 2 1 0\n")
+    np.testing.assert_array_equal(read_mesh_file(path).faces, [[4, 3, 2], [4, 2, 1], [4, 1, 0]])
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n",
+            r"the file ends at line 7, after 1 of the 2 faces its header declares \(is it",
+        ),
+        (
+            "OFF\n4 2 0\n0 0 0\n1 0 0\n" + "# padding\n" * 9,
+            r"the file ends at line 13, after 2 of the 4 vertices",
+        ),
+        ("OFF\n4\n", r"line 2: the header must give the numbers of vertices and faces"),
+        ("OFF\n-1 2 0\n", r"negative counts"),
+        ("OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n", r"line 4: vertex 1 has 2 coordinates, not 3"),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n",
+            r"vertex 1 holds a value that is not a number of that kind: '1 0 x'",
+        ),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", r"face 0 uses vertex 3, outside 0\.\.2"),
+        (
+            "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 0 1 -1 2\n",
+            r"face 1 uses vertex -1, outside",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n",
+            r"face 0 declares 2 corners; a face has 3 to 65536",
+        ),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", r"face 0 declares 4 corners and lists 3"),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n99999999999999999999999 0 1 2\n",
+            r"face 0 does not start with its number of corners|declares",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n",
+            r"face 0 holds a value that is not a number of that kind",
+        ),
+        ("OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", r"it contains no triangles"),
+        ("# only a comment\n\n", r"no OFF keyword"),
+        ("OFFX\n3 1 0\n", r"starts with 'OFFX', not the keyword OFF"),
+        (
+            "OFF\n9999 9999 0\n0 0 0\n",
+            r"declares 9999 vertices and 9999 faces, more than the file's 22 bytes can hold",
+        ),
+    ],
+)
+def test_a_malformed_or_cut_off_file_names_its_line(tmp_path, text, message):
+    path = tmp_path / "bad.off"
+    path.write_text(text)
+    with pytest.raises(
+        ValueError, match=r"^sample 4: mesh file .*bad\.off.* is not a valid \.off mesh"
+    ) as info:
+        read_mesh_file(path, "sample 4")
+    assert "\n" not in str(info.value)
+    assert info.match(message)
+
+
+def test_hostile_off_content_takes_the_memory_of_the_mesh(tmp_path):
+    """One-digit values took trimesh's reader about 40 bytes per byte of file (a 218 KB
+    .off.gz peaked at 5.6 GB); ours holds the arrays it returns and a block of lines."""
+    n = 500_000
+    text = b"OFF\n%d %d 0\n" % (n, n) + b"0 0 0\n" * n + b"3 0 0 0\n" * n
+    path = tmp_path / "dense.off.gz"
+    path.write_bytes(gzip.compress(text))
+    tracemalloc.start()
+    try:
+        mesh = read_mesh_file(path, allow_points=True)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert mesh.faces.shape == (n, 3)
+    arrays = mesh.vertices.nbytes + mesh.faces.nbytes  # 3.4 times the text here
+    # The content and one copy, the arrays, a block of lines (trimesh's: 40 x the text).
+    assert peak < 2 * len(text) + 1.2 * arrays + 10 * 2**20
+
+
+def test_gigabytes_of_blank_lines_are_refused_at_once(tmp_path):
+    path = tmp_path / "blank.off"
+    path.write_bytes(b"OFF\n3 1 0\n" + b"\n" * 2_000_000 + b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    with pytest.raises(ValueError, match=r"holds 2000006 lines for the 3 vertices and 1 faces"):
+        read_mesh_file(path)
+
+
+def test_text_meshes_beyond_the_token_limit_are_refused_before_parsing(tmp_path, monkeypatch):
+    mesh = trimesh.creation.icosphere(1)
+    obj = write(tmp_path / "a.obj", mesh)
+    ply_text = tmp_path / "text.ply"
+    ply_text.write_bytes(mesh.export(file_type="ply", encoding="ascii"))
+    ply_binary = write(tmp_path / "binary.ply", mesh)
+    stl_text = tmp_path / "text.stl"
+    stl_text.write_bytes(mesh.export(file_type="stl_ascii").encode())
+    stl_binary = write(tmp_path / "binary.stl", mesh)
+    assert reading.count_tokens(obj.read_bytes()) == len(obj.read_bytes().split())
+    monkeypatch.setattr(reading, "MAX_TEXT_TOKENS", 200)
+    for path in (obj, ply_text, stl_text):
+        with pytest.raises(
+            ValueError, match=r"holds \d+ values as text, more than MAX_TEXT_TOKENS \(200\)"
+        ):
+            read_mesh_file(path)
+    for path in (ply_binary, stl_binary):  # binary content is not parsed as text
+        assert len(read_mesh_file(path).faces) == len(mesh.faces)
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian"])
+def test_a_ply_cut_short_is_refused(tmp_path, encoding):
+    mesh = trimesh.creation.icosphere(2)
+    data = mesh.export(file_type="ply", encoding=encoding)
+    path = tmp_path / "cut.ply"
+    path.write_bytes(data[: int(len(data) * 0.95)])
+    with pytest.raises(ValueError, match=r"cut\.ply.* is not a valid \.ply mesh"):
+        read_mesh_file(path)

@@ -24,12 +24,18 @@ import lzma
 import os
 import zlib
 
+import numpy as np
+
+from ._off import read_off
+
 __all__ = [
     "COMPRESSIONS",
     "MAX_DECOMPRESSED_SIZE",
+    "MAX_TEXT_TOKENS",
     "MESH_FORMATS",
     "LimitedReader",
     "decompress",
+    "count_tokens",
     "read_mesh_file",
     "split_compression",
 ]
@@ -44,6 +50,12 @@ _ZIP_MAGIC = (b"PK\x03\x04", b"PK\x05\x06", b"PK\x07\x08")
 #: decompresses beyond it is refused (decompression stops at the limit), so that a
 #: small hostile file (a "compression bomb") cannot exhaust memory.
 MAX_DECOMPRESSED_SIZE = 2 * 1024**3
+
+#: Most values (whitespace-separated tokens) of a mesh file that trimesh parses as text
+#: (OBJ, ASCII PLY and STL): 32 Mi values, about 300 MB of typical text, bound the
+#: parser's memory to about 3 GB whatever the content. OFF files are read by our own
+#: reader (``_off.py``), whose memory is that of the mesh.
+MAX_TEXT_TOKENS = 32 * 1024**2
 
 #: File name endings of the compressed formats read, and their standard-library openers.
 COMPRESSIONS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
@@ -135,6 +147,57 @@ def decompress(path, compression: str, place: str, limit: int, what: str = "mesh
     return buffer
 
 
+def _is_text(buffer, file_type: str) -> bool:
+    """Whether trimesh parses this content as text (into a Python object per value)."""
+    head = bytes(buffer[:512]).lower()
+    if file_type == "ply":
+        return b"format ascii" in head
+    if file_type == "stl":  # a binary STL's size is fixed by its triangle count
+        size = buffer.nbytes
+        return size < 84 or size != 84 + 50 * int.from_bytes(bytes(buffer[80:84]), "little")
+    return file_type == "obj"
+
+
+def count_tokens(buffer) -> int:
+    """Number of whitespace-separated tokens in ``buffer``, counted a chunk at a time
+    (no copy of the content)."""
+    data = np.frombuffer(buffer, np.uint8)
+    count, previous_blank = 0, True
+    for start in range(0, len(data), _CHUNK * 16):
+        blank = data[start : start + _CHUNK * 16] <= 32  # space, tabs, line ends, NUL...
+        count += int(np.count_nonzero(blank[1:] < blank[:-1])) + (previous_blank and not blank[0])
+        previous_blank = bool(blank[-1])
+    return count
+
+
+def _check_text_tokens(buffer, file_type: str, place: str, path: str) -> None:
+    """Refuse a text mesh with more than ``MAX_TEXT_TOKENS`` values before trimesh
+    parses it: its text parsers hold a Python object per value (up to 46 bytes of
+    memory per byte of file, measured on an ASCII PLY of one-digit values)."""
+    if _is_text(buffer, file_type) and (tokens := count_tokens(buffer)) > MAX_TEXT_TOKENS:
+        raise ValueError(
+            f"{place}: mesh file {path!r} holds {tokens} values as text, more than "
+            f"MAX_TEXT_TOKENS ({MAX_TEXT_TOKENS}); refusing to parse it (a binary .ply "
+            "holds any size)"
+        )
+
+
+def _check_ply_counts(loaded, invalid: str) -> None:
+    """A PLY whose elements hold fewer rows than its header declares is cut short:
+    trimesh loads what is there without a word."""
+    raw = loaded.metadata.get("_ply_raw", {}) if hasattr(loaded, "metadata") else {}
+    for name, element in raw.items():
+        declared, data = element.get("length"), element.get("data")
+        if not isinstance(data, dict) or declared is None:
+            continue
+        for column in data.values():
+            if len(column) != declared:
+                raise ValueError(
+                    f"{invalid}: its header declares {declared} {name} rows and it holds "
+                    f"{len(column)} (is it cut short?)"
+                )
+
+
 def read_mesh_file(
     path,
     place: str = "mesh",
@@ -218,10 +281,20 @@ def read_mesh_file(
     if head in _ZIP_MAGIC:
         raise ValueError(f"{place}: mesh file {path!r} is a zip archive; archives are refused")
     invalid = f"{place}: mesh file {path!r} is not a valid .{file_type} mesh"
+    if file_type == "off":
+        vertices, faces = read_off(source.getvalue(), invalid)
+        if allow_points and len(faces) == 0 and len(vertices):
+            return trimesh.PointCloud(vertices)
+        if len(faces) == 0:
+            raise ValueError(f"{invalid}: it contains no triangles")
+        return trimesh.Trimesh(vertices, faces, process=False)
+    _check_text_tokens(source.getbuffer(), file_type, place, path)
     try:
         loaded = trimesh.load(source, file_type=file_type, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on malformed files
         raise ValueError(f"{invalid} (it cannot be parsed)") from exc
+    if file_type == "ply":
+        _check_ply_counts(loaded, invalid)
     if allow_points and isinstance(loaded, trimesh.Trimesh) and len(loaded.faces) == 0:
         # Forced into a mesh, a file of vertices only loses them: read it as points.
         if hasattr(source, "seek"):
