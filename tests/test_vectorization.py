@@ -408,3 +408,44 @@ def test_one_weight_convention_for_images_and_kernels():
         called = clone(estimator).set_params(weight=persistence).fit_transform(diagrams)
         named = clone(estimator).set_params(weight="persistence").fit_transform(diagrams)
         np.testing.assert_allclose(called, named, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("estimator", "message"),
+    [
+        (
+            "BettiCurve(resolution=2**20 + 1)",
+            r"'resolution' parameter of BettiCurve must be an int in the range \[1, 1048576\]",
+        ),
+        ("Silhouette(resolution=10**12)", r"'resolution' parameter of Silhouette"),
+        ("EntropyCurve(resolution=10**12)", r"'resolution' parameter of EntropyCurve"),
+        ("PersistenceLandscape(n_landscapes=10**9)", r"'n_landscapes' parameter"),
+        (
+            "PersistenceLandscape(n_landscapes=4096, resolution=8192)",
+            r"n_landscapes \* resolution = 4096 \* 8192 values per diagram, more than MAX_LANDSC",
+        ),
+        (
+            "PersistenceImage(resolution=(100000, 100000))",
+            r"resolution must be 2 ints from 1 to 4096 \(MAX_PIXELS\)",
+        ),
+        ("PersistenceImage(resolution=(True, 2))", r"resolution must be 2 ints"),
+    ],
+)
+def test_sizes_beyond_memory_are_refused_by_name(estimator, message):
+    """Each of these reached numpy as a raw MemoryError (or a bool passed as an int)."""
+    import sklearn_meshph
+
+    model = eval(estimator, vars(sklearn_meshph))
+    with pytest.raises(ValueError, match=message):
+        model.fit([np.array([[0.0, 1.0]])])
+
+
+def test_signature_scales_are_bounded():
+    from sklearn_meshph import LaplacianEigenTransformer
+    from sklearn_meshph.spectral.signatures import MAX_SCALES, check_times
+
+    with pytest.raises(ValueError, match=r"'n_scales' parameter"):
+        LaplacianEigenTransformer(signature="hks", n_scales=MAX_SCALES + 1).fit([])
+    with pytest.raises(ValueError, match=r"times holds 1025 times, more than MAX_SCALES"):
+        check_times(np.ones(MAX_SCALES + 1))
+    assert len(check_times(np.ones(MAX_SCALES))) == MAX_SCALES

@@ -31,6 +31,7 @@ from .._registry import Option, Registry
 
 __all__ = [
     "HEAT_SIGNATURES",
+    "MAX_SCALES",
     "MAX_TIME",
     "MIN_TIME",
     "SIGNATURES",
@@ -71,6 +72,11 @@ def hks_times(eigenvalues: np.ndarray, size: int) -> np.ndarray:
     return np.geomspace(span[0], span[1], size) if size > 1 else span[1:]
 
 
+#: Most times or energies of a signature (``n_scales``, or fixed ``times``): each is a
+#: column per vertex, and a thousand is already far finer than the spectrum resolves.
+MAX_SCALES = 1024
+
+
 def check_times(times) -> np.ndarray:
     """Fixed times of a heat signature as a 1-D float64 array: not empty, each finite and
     within ``[MIN_TIME, MAX_TIME]``; a ``ValueError`` saying what is wrong otherwise."""
@@ -80,6 +86,8 @@ def check_times(times) -> np.ndarray:
     array = np.asarray(times, dtype=np.float64)
     if array.ndim != 1 or array.size == 0:
         raise ValueError(f"times must be a non-empty 1-D array of times, got shape {array.shape}")
+    if array.size > MAX_SCALES:
+        raise ValueError(f"times holds {array.size} times, more than MAX_SCALES ({MAX_SCALES})")
     bad = ~((array >= MIN_TIME) & (array <= MAX_TIME))  # NaN included
     if bad.any():
         raise ValueError(

@@ -27,7 +27,7 @@ from .factorization import SOLVERS
 from .laplacians import LAPLACIANS
 from .multiplicity import solve_covering, warn_if_repeated
 from .quality import warn_if_needles
-from .signatures import HEAT_SIGNATURES, SIGNATURES, check_times
+from .signatures import HEAT_SIGNATURES, MAX_SCALES, SIGNATURES, check_times
 from .solve import (
     SolveSettings,
     cloud_eigenpairs,
@@ -329,7 +329,7 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "signature": [Options(SIGNATURES)],
         "n_eigenpairs": [Interval(Integral, 2, None, closed="left"), None],
-        "n_scales": [Interval(Integral, 1, None, closed="left")],
+        "n_scales": [Interval(Integral, 1, MAX_SCALES, closed="both")],
         "times": [None, tuple, list, np.ndarray],
     }
 

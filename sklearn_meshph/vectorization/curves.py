@@ -16,7 +16,20 @@ from ._base import (
 )
 from ._compiled import betti_curves, entropy_curves, landscapes, silhouettes
 
-__all__ = ["BettiCurve", "EntropyCurve", "PersistenceLandscape", "Silhouette"]
+__all__ = [
+    "MAX_LANDSCAPE_VALUES",
+    "MAX_RESOLUTION",
+    "BettiCurve",
+    "EntropyCurve",
+    "PersistenceLandscape",
+    "Silhouette",
+]
+
+#: Largest ``resolution`` of a grid function (values per diagram).
+MAX_RESOLUTION = 2**20
+#: Largest ``n_landscapes * resolution`` of :class:`PersistenceLandscape` (values per
+#: diagram, 128 MiB per sample and diagram as float64).
+MAX_LANDSCAPE_VALUES = 2**24
 
 
 def _sample_grid(points, resolution, sample_range, keep_endpoints) -> np.ndarray:
@@ -39,7 +52,7 @@ def _sample_grid(points, resolution, sample_range, keep_endpoints) -> np.ndarray
 
 
 _GRID_CONSTRAINTS: dict = {
-    "resolution": [Interval(Integral, 1, None, closed="left")],
+    "resolution": [Interval(Integral, 1, MAX_RESOLUTION, closed="both")],
     "sample_range": [tuple, list, None],
     "keep_endpoints": ["boolean"],
     **COMMON_CONSTRAINTS,
@@ -143,7 +156,7 @@ class PersistenceLandscape(_GridFunction):
 
     _parameter_constraints: dict = {
         **_GRID_CONSTRAINTS,
-        "n_landscapes": [Interval(Integral, 1, None, closed="left")],
+        "n_landscapes": [Interval(Integral, 1, MAX_LANDSCAPE_VALUES, closed="both")],
     }
     _feature = "landscape"
 
@@ -162,6 +175,15 @@ class PersistenceLandscape(_GridFunction):
         super().__init__(
             resolution, sample_range, keep_endpoints, infinite, n_jobs, dtype, essential
         )
+
+    def _check_params(self) -> None:
+        super()._check_params()
+        if self.n_landscapes * self.resolution > MAX_LANDSCAPE_VALUES:
+            raise ValueError(
+                f"PersistenceLandscape: n_landscapes * resolution = {self.n_landscapes} * "
+                f"{self.resolution} values per diagram, more than MAX_LANDSCAPE_VALUES "
+                f"({MAX_LANDSCAPE_VALUES})"
+            )
 
     def _curves(self, points, starts, stops, grid):
         return landscapes(points, starts, stops, grid, self.n_landscapes)

@@ -19,6 +19,10 @@ from ._base import (
 )
 from ._compiled import images
 
+#: Most pixels along each side of a persistence image (4096 x 4096 values per diagram at
+#: most: 128 MiB per sample and diagram as float64).
+MAX_PIXELS = 4096
+
 __all__ = ["PersistenceImage"]
 
 _SECTIONS = common_sections(
@@ -120,9 +124,13 @@ class PersistenceImage(PackedVectorizer):
     def _check_params(self) -> None:
         super()._check_params()
         if len(self.resolution) != 2 or not all(
-            isinstance(r, Integral) and r >= 1 for r in self.resolution
+            isinstance(r, Integral) and not isinstance(r, bool) and 1 <= r <= MAX_PIXELS
+            for r in self.resolution
         ):
-            raise ValueError(f"resolution must be 2 positive ints, got {self.resolution!r}")
+            raise ValueError(
+                f"resolution must be 2 ints from 1 to {MAX_PIXELS} (MAX_PIXELS), got "
+                f"{self.resolution!r}"
+            )
         if self.im_range is not None and len(self.im_range) != 4:
             raise ValueError(f"im_range must have 4 entries, got {self.im_range!r}")
 
