@@ -79,35 +79,105 @@ def _content(path: str, place: str) -> bytes:
         return stream.read()
 
 
+_BLANK_LINES = re.compile(rb"(?m)^[ \t\f\v]*(?:\n|\Z)")
+_ERROR_CHUNK = 1 << 16  # bytes of text looked at a time (a Python object per line in it)
+_SPACES = np.frombuffer(b" \t\n\x0b\x0c", np.uint8)  # what a blank line holds
+
+
+def _newlines(content: bytes) -> bytes:
+    """``content`` with every line end (``\r\n``, a lone ``\r``) made ``\n``: the
+    same lines as ``bytes.splitlines``, one copy of the text."""
+    if b"\r" not in content:
+        return content
+    # bytes.replace, not re.sub: a regular expression's substitution holds a Python
+    # object per replaced line end (43 bytes of memory per byte of "1, 2\r" lines).
+    return content.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+
+
+def _without_blank_lines(content: bytes) -> bytes:
+    """``content`` with line ends made ``\n`` and blank lines (or lines of spaces)
+    left out, a piece at a time (a substitution holds a Python object per match)."""
+    return b"".join(_BLANK_LINES.sub(b"", piece) for _, piece in _chunks(_newlines(content)))
+
+
+def _chunks(content: bytes):
+    """``(number of its first line, piece)`` of ``\n``-ended text, in pieces of about
+    ``_ERROR_CHUNK`` bytes cut after a line end, so that the error paths hold neither a
+    list of all the lines nor a Python object per line beyond one piece."""
+    start, number, end = 0, 1, len(content)
+    while start < end:
+        stop = min(start + _ERROR_CHUNK, end)
+        if stop < end:
+            cut = content.rfind(b"\n", start, stop)
+            cut = content.find(b"\n", stop) if cut < 0 else cut  # a line longer than that
+            stop = end if cut < 0 else cut + 1
+        piece = content[start:stop]
+        yield number, piece
+        number += piece.count(b"\n")
+        start = stop
+
+
+def _filled_lines(piece: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Indices in ``piece`` of its lines that are not blank, and every line's start and
+    end offsets."""
+    data = np.frombuffer(piece, np.uint8)
+    ends = np.flatnonzero(data == 10)
+    if not len(ends) or ends[-1] != len(data) - 1:
+        ends = np.append(ends, len(data))
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    line_of = np.searchsorted(ends, np.flatnonzero(~np.isin(data, _SPACES)))
+    return np.unique(line_of), starts, ends
+
+
 def _line_number(content: bytes, row: int) -> int:
     """The line number (1-based) of table row ``row`` (blank lines hold no row)."""
-    filled = np.flatnonzero([bool(line.strip()) for line in content.splitlines()])
-    return int(filled[row]) + 1
+    for number, piece in _chunks(_newlines(content)):
+        filled = _filled_lines(piece)[0]
+        if row < len(filled):
+            return number + int(filled[row])
+        row -= len(filled)
+    raise AssertionError("a table row beyond the file's lines")  # callers pass a row read
 
 
 def _bad_line(content: bytes, dtype, width: int | None) -> str:
-    """Where and why ``content`` is not a table of ``dtype`` (the error path only)."""
-    for number, line in enumerate(content.splitlines(), start=1):
-        fields = [f.strip() for f in line.decode("latin-1").split(",")]
-        if fields == [""]:
+    """Where and why ``content`` is not a table of ``dtype`` (the error path only):
+    NumPy reads it a piece at a time, and the first piece it cannot read line by line."""
+    for number, piece in _chunks(_newlines(content)):
+        table = _loaded(piece, dtype)
+        if table is None:  # lines of spaces alone: NumPy refuses them
+            table = _loaded(_without_blank_lines(piece), dtype)
+        if table is not None and (table.size == 0 or width in (None, table.shape[1])):
+            width = table.shape[1] if table.size else width
             continue
-        width = len(fields) if width is None else width
-        if len(fields) != width:
-            return (
-                f"line {number} holds {len(fields)} comma-separated value(s) where {width} "
-                "are expected"
-            )
-        for text in fields:
-            kind = "an integer" if dtype is np.int64 else "a number"
-            if "_" in text:  # Python's int and float read "1_0" as 10; NumPy does not
-                return f"line {number} holds {text[:40]!r}, not {kind}"
-            try:
-                value = int(text) if dtype is np.int64 else float(text)
-            except ValueError:
-                return f"line {number} holds {text[:40]!r}, not {kind}"
-            if dtype is np.int64 and not _INT64.min <= value <= _INT64.max:
-                return f"line {number} holds {value}, beyond 64-bit integers"
+        filled, starts, ends = _filled_lines(piece)
+        for index in filled:
+            line = piece[starts[index] : ends[index]]
+            reason, width = _bad_fields(line, number + int(index), dtype, width)
+            if reason:
+                return reason
     return _NO_BAD_LINE
+
+
+def _bad_fields(line: bytes, number: int, dtype, width: int | None):
+    """Why a line is not a row of ``width`` values of ``dtype`` (None if it is one),
+    and the width."""
+    fields = [f.strip() for f in line.decode("latin-1").split(",")]
+    width = len(fields) if width is None else width
+    if len(fields) != width:
+        return (
+            f"line {number} holds {len(fields)} comma-separated value(s) where {width} are expected"
+        ), width
+    kind = "an integer" if dtype is np.int64 else "a number"
+    for text in fields:
+        if "_" in text:  # Python's int and float read "1_0" as 10; NumPy does not
+            return f"line {number} holds {text[:40]!r}, not {kind}", width
+        try:
+            value = int(text) if dtype is np.int64 else float(text)
+        except ValueError:
+            return f"line {number} holds {text[:40]!r}, not {kind}", width
+        if dtype is np.int64 and not _INT64.min <= value <= _INT64.max:
+            return f"line {number} holds {value}, beyond 64-bit integers", width
+    return None, width
 
 
 def _loaded(content: bytes, dtype) -> np.ndarray | None:
@@ -133,8 +203,7 @@ def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
         if reason == _NO_BAD_LINE:
             # Lines of spaces alone, or lines ended by a lone "\r": NumPy refuses what
             # the line rule (and _line_number) reads as blank lines; read without them.
-            filled = [line for line in content.splitlines() if line.strip()]
-            table = _loaded(b"\n".join(filled), dtype)
+            table = _loaded(_without_blank_lines(content), dtype)
     if table is not None and table.size == 0:
         table = np.empty((0, width or 1), dtype=dtype)
     if table is None or (width is not None and table.shape[1] != width):
