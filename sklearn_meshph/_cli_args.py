@@ -16,6 +16,7 @@ from sklearn.model_selection import StratifiedKFold
 
 from ._cli_messages import UsageError, one_line
 from ._param_validation import check_params
+from ._report import RESULT_FILES
 from ._version import VERSION
 from .datasets import SAMPLE_EXTENSIONS
 from .pipelines import PRESETS, make_mesh_distance
@@ -267,8 +268,18 @@ def check_graph_pipeline(pipeline) -> None:
 def check_output(output: Path) -> None:
     """Refuse an ``--output`` that cannot be written, without creating anything: a file,
     a path under a file, or a folder where no file can be made."""
+    if output.is_symlink() and not output.exists():
+        raise UsageError(f"--output {str(output)!r} is a symbolic link to nothing")
     if output.exists() and not output.is_dir():
         raise UsageError(f"--output {str(output)!r} exists and is not a folder")
+    for name in RESULT_FILES:  # checked now: a FIFO there would hang the job at its end
+        inside = output / name
+        if (inside.exists() or inside.is_symlink()) and not inside.is_file():
+            raise UsageError(
+                f"--output {str(output)!r} holds {name!r}, which is not a regular file (a "
+                "folder, a FIFO, a device or a broken link): the results would be written "
+                "there; remove it or choose another --output"
+            )
     existing = output
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent

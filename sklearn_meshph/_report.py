@@ -12,6 +12,8 @@ import numpy as np
 from sklearn.metrics import confusion_matrix
 
 DATA_FILES = ("distances.npy", "diagrams.npz", "predictions.csv", "summary.json")
+#: Every file the main job may write in ``--output``.
+RESULT_FILES = (*DATA_FILES, "tsne.png", "diagrams.png", "eigenfunctions.png")
 MAX_WIDTH = 100
 
 

@@ -189,14 +189,38 @@ def main(argv: list[str] | None = None) -> int:
             status = _main(argv)
         finally:  # what is left in the buffer, while a closed pipe can still be caught
             sys.stdout.flush()
-    except BrokenPipeError:  # the reader stopped early (``| head``): end quietly
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())  # the exit's own flush must not fail again
-        return 0
+    except BrokenPipeError:  # the reader stopped early (``| head``)
+        _silence_stdout()
+        _tell("stopped: standard output was closed by its reader")
+        return 141  # as a program ended by SIGPIPE, so that `set -o pipefail` sees it
+    except OSError as exc:  # the results' folder or standard output cannot be written
+        _silence_stdout()
+        where = f": {exc.filename!r}" if exc.filename else " (standard output)"
+        _tell(f"error: cannot write{where}: {exc.strerror or exc}")
+        return 1
     except KeyboardInterrupt:  # Ctrl-C: one line, not the traceback of wherever it was
-        print("interrupted", file=sys.stderr)
+        _tell("interrupted")
         return 130
     return status
+
+
+def _silence_stdout() -> None:
+    """Standard output made /dev/null, so that the exit's own flush does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # no file descriptor behind sys.stdout
+        pass
+    finally:
+        os.close(devnull)
+
+
+def _tell(line: str) -> None:
+    """One line on standard error, if it can still be written."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
 
 
 def _main(argv) -> int:
