@@ -323,3 +323,25 @@ def test_an_empty_memory_path_is_refused(memory):
         LaplacianEigenTransformer(memory=memory).fit_transform([MESH])
     with pytest.raises(ValueError, match="memory must be a folder.*got an empty path"):
         make_mesh_distance(memory=memory)
+
+
+def test_concurrent_writers_keep_each_others_entries(tmp_path):
+    """Two processes that both missed an entry both store it. The second removed the
+    first's fresh entry before renaming its own (under the first's readers, who then
+    warned that it was unusable and recomputed); it now keeps the entry there."""
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    placed = os.stat(entry).st_ino
+    late = EigenCache(tmp_path)  # a writer whose load missed before the first stored
+    key = entry.name
+    stored = EigenCache(tmp_path).load(key, len(MESH[0]), 10**6)
+    late.store(key, stored)
+    assert os.stat(entry).st_ino == placed  # the first writer's entry, untouched
+    assert [p.name for p in late.folder.iterdir()] == [key]  # no temporary left
+    # An entry its own load found unusable is replaced, whole.
+    (entry / "values.npy").write_bytes(b"damaged")
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    assert os.stat(entry).st_ino != placed
+    np.testing.assert_array_equal(again.values, first.values)
+    assert [p.name for p in late.folder.iterdir()] == [key]

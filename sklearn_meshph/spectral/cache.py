@@ -226,6 +226,7 @@ class EigenCache:
     def __init__(self, location):
         self.folder = Path(location) / _FOLDER
         self._read_only = False
+        self._unusable: set[str] = set()  # keys whose entry load() could not use
 
     @staticmethod
     def key(vertices, faces, settings: dict) -> str:
@@ -254,21 +255,19 @@ class EigenCache:
         except (FileNotFoundError, NotADirectoryError):  # no entry, or no folder yet
             return None
         except (OSError, ValueError) as error:
-            warnings.warn(
-                f"eigen cache entry {entry} is unusable and is recomputed: {error}",
-                CacheWarning,
-                stacklevel=3,
-            )
-            return None
+            return self._unusable_entry(entry, key, error)
         try:
             return self._read(entry, key, n_input, max_pairs, points, graph)
         except (OSError, ValueError, KeyError, TypeError, RecursionError, OverflowError) as error:
-            warnings.warn(
-                f"eigen cache entry {entry} is unusable and is recomputed: {error}",
-                CacheWarning,
-                stacklevel=3,
-            )
-            return None
+            return self._unusable_entry(entry, key, error)
+
+    def _unusable_entry(self, entry: Path, key: str, error) -> None:
+        self._unusable.add(key)
+        warnings.warn(
+            f"eigen cache entry {entry} is unusable and is recomputed: {error}",
+            CacheWarning,
+            stacklevel=4,
+        )
 
     def _read(self, entry: Path, key: str, n_input: int, max_pairs: int, points: bool, graph: bool):
         with _open_regular(entry / "header.json") as stream:
@@ -341,6 +340,29 @@ class EigenCache:
         )
         return clean, values, vectors
 
+    def _place(self, temporary: Path, key: str) -> None:
+        """Rename a written entry into place. An entry already there is another writer's
+        (as good as ours: the same key, the same solve) and is kept, unless ``load``
+        found it unusable: then it is moved aside first, so that a reader sees the old
+        entry or ours, never a half-removed one (removing it in place made concurrent
+        writers delete each other's fresh entries under their readers)."""
+        entry = self.folder / key
+        try:
+            os.rename(temporary, entry)  # fails if an entry (not an empty folder) is there
+            return
+        except OSError:
+            pass
+        if key in self._unusable:
+            aside = self.folder / f".{key}.{os.getpid()}.{uuid.uuid4().hex}.old.tmp"
+            try:
+                os.rename(entry, aside)  # a link or a file is moved, never followed
+                os.rename(temporary, entry)
+                self._unusable.discard(key)
+            except OSError:  # another writer placed theirs meanwhile
+                pass
+            _remove(aside)
+        shutil.rmtree(temporary, ignore_errors=True)
+
     def store(self, key: str, result) -> None:
         """Write an entry atomically; warn once and go on if the folder is read-only."""
         if self._read_only:
@@ -381,12 +403,7 @@ class EigenCache:
             for name, array in arrays.items():
                 array = np.ascontiguousarray(array, dtype=dtypes.get(name, np.float64))
                 np.save(temporary / f"{name}.npy", array, allow_pickle=False)
-            entry = self.folder / key
-            _remove(entry)  # an unusable entry being replaced
-            try:
-                os.rename(temporary, entry)
-            except OSError:  # another writer got there first: theirs is as good
-                shutil.rmtree(temporary, ignore_errors=True)
+            self._place(temporary, key)
         except OSError as error:
             shutil.rmtree(temporary, ignore_errors=True)
             self._read_only = True
