@@ -116,6 +116,18 @@ def test_a_far_outlier_does_not_weld_the_surface(stray):
     assert field.cleaning.n_far_points == len(stray)
 
 
+@pytest.mark.parametrize("far", [1e100, 1e300, -1.7e308])
+def test_an_outlier_beyond_the_digits_of_the_shape_leaves_its_eigenvalues(far):
+    """One outlier at 1e100 centred the unit box so far away that subtracting the centre
+    cancelled every digit of the sphere's coordinates ("fewer than 4 of its points are
+    in a local triangle"); the box is now that of the points within Tukey's fences."""
+    clean = fields([sphere_points()])[0]
+    with pytest.warns(MeshCleaningWarning, match="1 far points"):
+        field = fields([np.vstack([sphere_points(), [[far, far / 3, 0.0]]])])[0]
+    assert field.cleaning.n_far_points == 1 and len(field.vertices) == 1500
+    np.testing.assert_allclose(field.eigenvalues, clean.eigenvalues, rtol=1e-6)
+
+
 def test_the_component_kept_is_the_one_of_most_points_not_of_most_area():
     # 15 points scattered five radii out span more area than the sphere: the sphere
     # was dropped as far and the scatter kept.

@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import DEGENERATE_SINE
+from ..mesh._geometry import unit_box
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
@@ -19,7 +20,7 @@ from .graph import canonical_order, neighbourhood_components, sparse_outliers, u
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
 
-__all__ = ["clean_cloud"]
+__all__ = ["FAR_BOX_RATIO", "clean_cloud", "cloud_unit_box"]
 
 
 def _refuse_degenerate(points: np.ndarray, place: str) -> None:
@@ -41,6 +42,36 @@ def _within_fences(points: np.ndarray) -> np.ndarray:
     reach = 3.0 * (high - low)
     inside = np.all((points >= low - reach) & (points <= high + reach), axis=1)
     return points[inside] if np.count_nonzero(inside) >= MIN_POINTS else points
+
+
+#: A cloud whose box is this many times the box of its points within Tukey's fences is
+#: put in the unit box of those points (see :func:`cloud_unit_box`).
+FAR_BOX_RATIO = 1e6
+# Unit-box coordinates of far points are clipped here (they are dropped as far points).
+_FAR_CLIP = 1e12
+
+
+def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`sklearn_meshph.mesh._geometry.unit_box` of a cloud, robust to far points.
+
+    The unit box of every point, unless the box is more than ``FAR_BOX_RATIO`` times
+    that of the points within Tukey's fences: then one outlier at 1e100 times the
+    shape's size centred the box so far away that subtracting its centre cancelled every
+    digit of the shape's coordinates. The box is then that of the points within the
+    fences, and the far points' coordinates in it are clipped at ``_FAR_CLIP`` (they are
+    dropped as far points; clipping keeps them finite and far).
+    """
+    unit, scale = unit_box(points)
+    bulk = _within_fences(points)
+    if len(bulk) == len(points):
+        return unit, scale
+    bulk_unit, bulk_scale = unit_box(bulk)
+    if not 0.0 < bulk_scale * FAR_BOX_RATIO < scale:
+        return unit, scale
+    low, high = bulk.min(axis=0), bulk.max(axis=0)
+    with np.errstate(over="ignore"):
+        moved = (points / 2 - (low / 2 + high / 2) / 2) / (bulk_scale / 2)
+    return np.clip(moved, -_FAR_CLIP, _FAR_CLIP), bulk_scale
 
 
 def _weld_rtol(points: np.ndarray) -> float:
