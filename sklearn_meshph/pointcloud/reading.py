@@ -23,7 +23,13 @@ import numpy as np
 
 from ..mesh.reading import LimitedReader, read_mesh_file, split_compression
 
-__all__ = ["MAX_TEXT_SIZE", "POINT_CLOUD_FORMATS", "read_point_cloud_file", "read_sample_file"]
+__all__ = [
+    "MAX_SKIPPED_LINES",
+    "MAX_TEXT_SIZE",
+    "POINT_CLOUD_FORMATS",
+    "read_point_cloud_file",
+    "read_sample_file",
+]
 
 #: The text point-cloud formats read (file name endings without the dot).
 POINT_CLOUD_FORMATS = ("xyz", "pts")
@@ -32,6 +38,11 @@ POINT_CLOUD_FORMATS = ("xyz", "pts")
 MAX_TEXT_SIZE = 512 * 1024**2
 
 _BLOCK = 4096  # lines parsed at a time
+
+#: Most blank or comment lines of a text point-cloud file, beyond ``_SKIPPED_PER_POINT``
+#: per point: each is read on its own, and 512 MiB of them took 5 minutes to refuse.
+MAX_SKIPPED_LINES = 1_000_000
+_SKIPPED_PER_POINT = 16
 
 #: Longest line read, in bytes: thousands of numbers, far more than a point's columns.
 #: A longer line (a file with carriage returns only for line ends, or junk) is refused
@@ -48,7 +59,7 @@ def _data_lines(path: str, compression, place: str):
         stream = LimitedReader(path, compression, place, MAX_TEXT_SIZE, "point cloud file")
 
     def lines():
-        number = 0
+        number = held = 0
         while line := stream.readline(MAX_LINE_LENGTH + 1):
             number += 1
             if len(line) > MAX_LINE_LENGTH:
@@ -63,7 +74,15 @@ def _data_lines(path: str, compression, place: str):
                     "carriage returns: its lines must end with \\n (or \\r\\n)"
                 )
             if text:
+                held += 1
                 yield number, text
+            elif number - held > MAX_SKIPPED_LINES + _SKIPPED_PER_POINT * held:
+                raise ValueError(
+                    f"{place}: cannot read point cloud file {path!r}: {number - held} of its "
+                    f"first {number} lines are blank or comments, more than "
+                    f"{MAX_SKIPPED_LINES} plus {_SKIPPED_PER_POINT} per point (reading "
+                    "them would take minutes)"
+                )
 
     try:
         yield lines()
