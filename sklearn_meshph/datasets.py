@@ -332,7 +332,7 @@ def _shape(name, rng, resolution):
     {
         "n_per_class": [Interval(Integral, 1, None, closed="left")],
         "classes": [tuple, list, None],
-        "resolution": [tuple, list],
+        "resolution": [tuple, list, np.ndarray],
         "noise": [Interval(Real, 0, None, closed="left")],
         "random_state": ["random_state"],
         "return_X_y": ["boolean"],

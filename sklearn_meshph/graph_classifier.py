@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 from numbers import Integral
 
+import numpy as np
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.pipeline import FeatureUnion, Pipeline
 
@@ -59,7 +60,7 @@ def graph_eigen(eigen: dict, times=GRAPH_TIMES) -> LaplacianEigenTransformer:
 
 @validate_params(
     {
-        "times": [tuple, list],
+        "times": [tuple, list, np.ndarray],
         "classifier": [Options(("auto", "kernels", "trees"))],
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],

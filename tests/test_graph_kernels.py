@@ -239,9 +239,13 @@ def test_kernel_sum_refuses_bad_parameters():
     stack, y = separable_stack()
     with pytest.raises(ValueError, match="groups must give an int to each of the 2"):
         KernelSumSVC(groups=[0]).fit(stack, y)
-    for bad in ((1.0, 0.0), (np.nan,), (np.inf,)):
+    for bad in ((1.0, 0.0), (np.nan,), (np.inf,), (True,), np.array([]), np.ones((1, 1))):
         with pytest.raises(ValueError, match="KernelSumSVC|C must be a non-empty sequence"):
             KernelSumSVC(C=bad).fit(stack, y)
+    # A 1-D array is a sequence, as the docs say (it was refused; then "truth value of an
+    # array is ambiguous").
+    model = KernelSumSVC(C=np.array([1.0, 10.0])).fit(stack, y)
+    assert {c for _, c in model.cv_scores_} == {1.0, 10.0}
     with pytest.raises(ValueError, match="1 training sample: .* needs at least 2"):
         KernelSumSVC().fit(stack[:1, :1], y[:1])
 

@@ -449,3 +449,25 @@ def test_signature_scales_are_bounded():
     with pytest.raises(ValueError, match=r"times holds 1025 times, more than MAX_SCALES"):
         check_times(np.ones(MAX_SCALES + 1))
     assert len(check_times(np.ones(MAX_SCALES))) == MAX_SCALES
+
+
+def test_sequences_of_numbers_may_be_arrays():
+    """A 1-D array where a sequence of numbers is documented was refused by the
+    parameter checks (tuple or list only)."""
+    from sklearn_meshph import DiagramStatistics, make_graph_classifier, make_shapes
+
+    diagrams = [np.array([[0.0, 1.0]]), np.array([[0.2, 0.5]])]
+    as_arrays = [
+        (PersistenceImage(resolution=np.array([3, 2]), im_range=np.array([0, 1, 0, 1])), {}),
+        (BettiCurve(sample_range=np.array([0.0, 1.0])), {}),
+        (DiagramStatistics(quantiles=np.array([0.5])), {}),
+    ]
+    for model, _ in as_arrays:
+        as_tuple = clone(model).set_params(
+            **{k: tuple(v) for k, v in model.get_params().items() if isinstance(v, np.ndarray)}
+        )
+        np.testing.assert_array_equal(
+            model.fit_transform(diagrams), as_tuple.fit_transform(diagrams)
+        )
+    assert len(make_graph_classifier(times=np.array([0.1, 10.0])).get_params()["eigen__times"]) == 2
+    assert len(make_shapes(1, resolution=np.array([8, 16]), return_X_y=True)[0]) == 6

@@ -53,7 +53,7 @@ def _sample_grid(points, resolution, sample_range, keep_endpoints) -> np.ndarray
 
 _GRID_CONSTRAINTS: dict = {
     "resolution": [Interval(Integral, 1, MAX_RESOLUTION, closed="both")],
-    "sample_range": [tuple, list, None],
+    "sample_range": [tuple, list, np.ndarray, None],
     "keep_endpoints": ["boolean"],
     **COMMON_CONSTRAINTS,
 }

@@ -91,7 +91,7 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     _parameter_constraints = {
         "groups": [tuple, list, np.ndarray, Options(("graph",)), None],
         "bandwidth": BANDWIDTH,
-        "C": [tuple, list],
+        "C": [tuple, list, np.ndarray],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "max_selection_samples": [Interval(Integral, 2, None, closed="left")],
         "random_state": ["random_state"],
@@ -191,7 +191,9 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         """
         check_params(self._parameter_constraints, self.get_params(deep=False), "KernelSumSVC")
         # not (c > 0) also refuses NaN, which SVC would report as its own C's fault
-        if not self.C or any(not isinstance(c, Real) or not (0 < c < np.inf) for c in self.C):
+        if len(self.C) == 0 or any(
+            isinstance(c, bool) or not isinstance(c, Real) or not (0 < c < np.inf) for c in self.C
+        ):
             raise ValueError(
                 f"C must be a non-empty sequence of positive finite numbers, got {self.C}"
             )

@@ -92,8 +92,8 @@ class PersistenceImage(PackedVectorizer):
 
     _parameter_constraints: dict = {
         "bandwidth": BANDWIDTH,
-        "resolution": [tuple, list],
-        "im_range": [tuple, list, None],
+        "resolution": [tuple, list, np.ndarray],
+        "im_range": [tuple, list, np.ndarray, None],
         "sampling": [Options(("point", "pixel"))],
         **WEIGHT_CONSTRAINTS,
         **COMMON_CONSTRAINTS,

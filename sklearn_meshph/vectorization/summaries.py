@@ -108,7 +108,7 @@ class DiagramStatistics(_Summary):
     array([[2., 4., 3., 2., 2., 0., 2.]])
     """
 
-    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [tuple, list]}
+    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [tuple, list, np.ndarray]}
 
     def __init__(
         self,
