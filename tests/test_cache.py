@@ -95,7 +95,16 @@ def test_a_crafted_pickle_in_the_cache_cannot_run_code(tmp_path):
 
 @pytest.mark.parametrize(
     "damage",
-    ["wrong shape", "huge header", "nan", "foreign key", "truncated", "wrong dtype"],
+    [
+        "wrong shape",
+        "huge header",
+        "nan",
+        "foreign key",
+        "truncated",
+        "wrong dtype",
+        "flipped",
+        "no checksum",
+    ],
 )
 def test_an_unusable_entry_is_recomputed_with_a_warning(tmp_path, damage):
     first = solve(tmp_path)
@@ -114,6 +123,12 @@ def test_an_unusable_entry_is_recomputed_with_a_warning(tmp_path, damage):
     elif damage == "foreign key":
         header = json.loads((entry / "header.json").read_text())
         header["key"] = "0" * 64
+        (entry / "header.json").write_text(json.dumps(header))
+    elif damage == "flipped":  # well-formed, finite, the right shape: only the checksum
+        np.save(entry / "vectors.npy", -vectors)  # tells (the sign of each is a choice)
+    elif damage == "no checksum":  # an entry of the format before checksums
+        header = json.loads((entry / "header.json").read_text())
+        del header["sha256"]
         (entry / "header.json").write_text(json.dumps(header))
     elif damage == "truncated":
         data = (entry / "vectors.npy").read_bytes()

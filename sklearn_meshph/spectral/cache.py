@@ -10,7 +10,8 @@ is looked up, and a mesh's entry only where a mesh is. A graph is keyed on its n
 count, edges and edge weights.
 Nothing is unpickled: arrays are read from their ``.npy`` header, whose dtype and shape
 are checked against what the key's mesh allows before a byte of data is read, then
-checked for finiteness and consistency. A corrupt, truncated, oversized or mismatched
+checked against the SHA-256 of its data that the header holds (an array replaced by
+another well-formed one, a bit flipped on disk), for finiteness and for consistency. A corrupt, truncated, oversized or mismatched
 entry is recomputed and replaced, with a :class:`CacheWarning`; so is a tampered header
 (a wrong type, ``Infinity``, deep nesting) and anything but a regular file in place of
 one (a FIFO, a folder, a symbolic link), which is never opened. The key hashes the
@@ -77,8 +78,10 @@ NUMERICS_FILES = (
     "pointcloud/_triangulation.py",
 )
 
-_FORMAT = "sklearn-meshph eigen cache 2"
+_FORMAT = "sklearn-meshph eigen cache 3"  # 3: digests of the arrays in the header
 _FOLDER = "sklearn_meshph_eigen"
+# The arrays of an entry, each a .npy file whose data's SHA-256 the header holds.
+_ARRAYS = ("vertices", "faces", "vertex_indices", "input_to_kept", "edges", "values", "vectors")
 _MAX_HEADER = 1 << 16  # bytes
 _STALE_TEMPORARY = 3600.0  # seconds after which a temporary folder is an orphan
 
@@ -161,9 +164,10 @@ def _remove(path: Path) -> None:
         pass
 
 
-def _read_array(path: Path, dtype, max_size: int, ndim: int) -> np.ndarray:
+def _read_array(path: Path, dtype, max_size: int, ndim: int, digest=None) -> np.ndarray:
     """An array from a ``.npy`` file whose header says ``dtype``, ``ndim`` dimensions
-    and at most ``max_size`` elements, checked before the data is read."""
+    and at most ``max_size`` elements, checked before the data is read; with
+    ``digest``, its data's SHA-256 must be that."""
     with _open_regular(path) as stream:
         version = np.lib.format.read_magic(stream)
         if version == (1, 0):
@@ -180,6 +184,8 @@ def _read_array(path: Path, dtype, max_size: int, ndim: int) -> np.ndarray:
         data = stream.read(size * np.dtype(dtype).itemsize + 1)
     if len(data) != size * np.dtype(dtype).itemsize:
         raise ValueError(f"{path.name}: {len(data)} bytes of data for shape {shape}")
+    if digest is not None and hashlib.sha256(data).hexdigest() != digest:
+        raise ValueError(f"{path.name}: its data is not what was stored (checksum)")
     return np.frombuffer(data, dtype=dtype).reshape(shape).copy()
 
 
@@ -298,13 +304,20 @@ class EigenCache:
                 f"sizes {n} vertices, {k} pairs, {faces_size // 3} faces, {edges_size // 2} "
                 f"edges do not fit the {kind}"
             )
-        vertices = _read_array(entry / "vertices.npy", np.float64, 3 * n, 2)
-        faces = _read_array(entry / "faces.npy", np.int64, faces_size, 2)
-        indices = _read_array(entry / "vertex_indices.npy", np.int64, n, 1)
-        to_kept = _read_array(entry / "input_to_kept.npy", np.int64, n_input, 1)
-        edges = _read_array(entry / "edges.npy", np.int64, edges_size, 2)
-        values = _read_array(entry / "values.npy", np.float64, k, 1)
-        vectors = _read_array(entry / "vectors.npy", np.float64, n * k, 2)
+        digests = header.get("sha256")
+        if not isinstance(digests, dict) or set(digests) != set(_ARRAYS):
+            raise ValueError("the header has no checksum of each array")
+
+        def read(name, dtype, size, ndim):
+            return _read_array(entry / f"{name}.npy", dtype, size, ndim, str(digests[name]))
+
+        vertices = read("vertices", np.float64, 3 * n, 2)
+        faces = read("faces", np.int64, faces_size, 2)
+        indices = read("vertex_indices", np.int64, n, 1)
+        to_kept = read("input_to_kept", np.int64, n_input, 1)
+        edges = read("edges", np.int64, edges_size, 2)
+        values = read("values", np.float64, k, 1)
+        vectors = read("vectors", np.float64, n * k, 2)
         checks = {
             "vertices": vertices.shape == (n, 0 if graph else 3) and np.isfinite(vertices).all(),
             "faces": faces.shape == (faces_size // 3, 3)
@@ -384,7 +397,6 @@ class EigenCache:
                     name: getattr(clean.report, name) for name in clean.report.__dataclass_fields__
                 },
             }
-            (temporary / "header.json").write_text(json.dumps(header))
             arrays = {
                 "vertices": clean.vertices,
                 "faces": clean.faces,
@@ -400,9 +412,12 @@ class EigenCache:
                 "input_to_kept": np.int64,
                 "edges": np.int64,
             }
+            header["sha256"] = {}
             for name, array in arrays.items():
                 array = np.ascontiguousarray(array, dtype=dtypes.get(name, np.float64))
                 np.save(temporary / f"{name}.npy", array, allow_pickle=False)
+                header["sha256"][name] = hashlib.sha256(array.data).hexdigest()
+            (temporary / "header.json").write_text(json.dumps(header))
             self._place(temporary, key)
         except OSError as error:
             shutil.rmtree(temporary, ignore_errors=True)
