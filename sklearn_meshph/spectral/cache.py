@@ -11,10 +11,11 @@ count, edges and edge weights.
 Nothing is unpickled: arrays are read from their ``.npy`` header, whose dtype and shape
 are checked against what the key's mesh allows before a byte of data is read, then
 checked against the SHA-256 of its data that the header holds (an array replaced by
-another well-formed one, a bit flipped on disk), for finiteness and for consistency. A corrupt, truncated, oversized or mismatched
-entry is recomputed and replaced, with a :class:`CacheWarning`; so is a tampered header
-(a wrong type, ``Infinity``, deep nesting) and anything but a regular file in place of
-one (a FIFO, a folder, a symbolic link), which is never opened. The key hashes the
+another well-formed one, a bit flipped on disk), for finiteness and for consistency.
+A corrupt, truncated, oversized or mismatched entry is recomputed and replaced, with a
+:class:`CacheWarning`; so is a tampered header (a wrong type, ``Infinity``, deep
+nesting) and anything but a regular file in place of one (a FIFO, a folder, a symbolic
+link), which is never opened. The key hashes the
 input mesh's bytes, the solver settings, the package version and
 :data:`NUMERICS_VERSION`, which any change to cleaning, assembly or the eigensolver
 must bump (a test fails when those modules change and it does not), so an upgrade
