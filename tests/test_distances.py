@@ -219,8 +219,10 @@ def test_large_diagrams_agree_with_hera_and_pot():
     assert wasserstein_distance(a, b) == pytest.approx(ref, rel=1e-9)
 
 
-def matching_cost(a, b, matched, order):
-    """Per-pair costs of a matching given as rows (i, j), -1 for the diagonal."""
+def matching_cost(a, b, matched, order, internal_p=np.inf):
+    """Per-pair costs of a matching given as rows (i, j), -1 for the diagonal, in the
+    ``internal_p`` ground metric."""
+    diagonal = 1.0 if internal_p == np.inf else 2.0 ** (1.0 / internal_p)
     costs = []
     for i, j in matched:
         if i >= 0 and j >= 0:
@@ -228,11 +230,17 @@ def matching_cost(a, b, matched, order):
                 assert np.isinf(b[j, 1]), "an essential point matched to a finite one"
                 costs.append(abs(a[i, 0] - b[j, 0]))
             else:
-                costs.append(np.abs(a[i] - b[j]).max())
+                difference = np.abs(a[i] - b[j])
+                largest = difference.max()  # divided first: subnormal squares underflow
+                costs.append(
+                    largest * np.linalg.norm(difference / largest, ord=internal_p)
+                    if largest > 0
+                    else 0.0
+                )
         else:
             point = a[i] if i >= 0 else b[j]
             assert np.isfinite(point[1]), "an essential point sent to the diagonal"
-            costs.append((point[1] - point[0]) / 2)
+            costs.append((point[1] - point[0]) / 2 * diagonal)
     return np.array(costs)
 
 
@@ -362,3 +370,46 @@ def test_subnormal_persistence_has_a_finite_wasserstein_distance():
     assert wasserstein_distance(far, np.array([[0.0, 1e-311], [7.0, 7.0]])) == 1.2e-311
     matrix = pairwise_diagram_distances([tiny, far, empty], metric="wasserstein")
     assert np.isfinite(matrix).all() and matrix[0, 2] == 1.1e-311
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    common=diagrams(tied=True),
+    a=diagrams(tied=True),
+    b=diagrams(tied=True),
+    exponent=st.sampled_from([-1070, -1040, -1010, -990]),
+    order=st.sampled_from([1.0, 2.0, 3.0, 10.0]),
+    internal_p=st.sampled_from([1.0, 2.0, np.inf]),
+)
+def test_a_subnormal_distance_beside_normal_persistence(common, a, b, exponent, order, internal_p):
+    """Found by an adversarial review: a diagram mixing normal and subnormal persistence
+    made the bottleneck scale subnormal, ``1 / s`` infinite, and the solver returned NaN,
+    a distance 36 times too large, or crashed the process. With the same normal points
+    on both sides (a grid of quarters, matched to themselves at cost 0), the distance is
+    that of the tiny parts, scaled exactly."""
+    s = 2.0**exponent
+    expected = wasserstein_distance(a, b, order=order, internal_p=internal_p) * s
+    left, right = np.vstack([common, a * s]), np.vstack([common, b * s])
+    ours, matched = wasserstein_distance(
+        left, right, order=order, internal_p=internal_p, matching=True
+    )
+    # A subnormal result keeps only the bits above 2^-1074.
+    assert ours == pytest.approx(expected, rel=1e-9, abs=2.0**-1070)
+    assert np.isfinite(ours) and (ours > 0) == (expected > 0)
+    assert (
+        pairwise_diagram_distances(
+            [left, right], metric="wasserstein", order=order, internal_p=internal_p
+        )[0, 1]
+        == ours
+    )
+    costs = matching_cost(left, right, matched, order, internal_p) / s  # no underflow
+    attained = ((costs**order).sum() ** (1 / order)) * s
+    assert attained == pytest.approx(ours, rel=1e-6, abs=2.0**-1070)
+
+
+def test_reviewed_cases_of_subnormal_distances():
+    assert wasserstein_distance([[0.0, 1.0], [0.0, 1e-310]], [[0.0, 1.0], [0.0, 0.0]]) == 5e-311
+    assert wasserstein_distance([[5e-324, 1.0]], [[0.0, 1.0]], order=1) == 5e-324
+    one_step = np.zeros((1000, 2))
+    one_step[:, 1] = 5e-324  # halving each persistence rounds it to 0
+    assert wasserstein_distance(one_step, np.zeros((0, 2)), order=1, internal_p=1) == 1000 * 5e-324

@@ -14,6 +14,8 @@ bottleneck scale when the optimum comes out so small that it may have underflowe
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -26,10 +28,11 @@ from ._pricing import sparse_solve
 
 # A scaled optimum below this is solved again at the scale of the bottleneck distance.
 _TINY = 1e-250
-# Below this largest persistence, ``1 / s`` may overflow (subnormal persistence): such
-# diagrams are solved magnified by ``2^_MAGNIFY`` (exact for them).
+# A scale below this (a subnormal persistence or bottleneck distance) is avoided by
+# solving the diagrams magnified by at most ``2^_MAGNIFY`` (exact: see ``transport``).
 _SMALLEST_SCALE = 2.0**-1000
 _MAGNIFY = 1000
+_SMALLEST_NORMAL = 2.0**-1022
 # Above this many point pairs, each point starts with its nearest neighbours only and
 # the edges the optimum needs are added by pricing (benchmarks/bench_distances.py).
 DENSE_PAIRS = 90_000
@@ -130,38 +133,24 @@ def _off_diagonal(d):
 
 
 @numba.njit(cache=True)
-def _transport_magnified(a, b, order, internal_p):
-    """:func:`transport` of two diagrams whose persistence is all below
-    ``_SMALLEST_SCALE``, where ``1 / s`` would overflow (subnormal persistence).
-
-    Points on the diagonal are left out (sending them to the diagonal costs nothing, and
-    no matching gains by using them: in every ``l_p`` ground metric a point is at least
-    as far from a diagonal point as from its own projection). The others then have both
-    coordinates below ``2^-948`` in magnitude (a difference below ``2^-1000`` between
-    two floats needs an ulp that small), so multiplying them by ``2^MAGNIFY`` is exact
-    and overflows nothing; the scale comes back divided by it.
-    """
-    keep_a, keep_b = _off_diagonal(a), _off_diagonal(b)
-    up = 2.0**_MAGNIFY
-    scale, total, kept_partner = _transport_normal(
-        a[keep_a] * up, b[keep_b] * up, order, internal_p
-    )
-    partner = np.full(len(a), DIAGONAL, np.int64)
-    for k in range(len(keep_a)):
-        if kept_partner[k] != DIAGONAL:
-            partner[keep_a[k]] = keep_b[kept_partner[k]]
-    return scale * 2.0**-_MAGNIFY, total, partner
+def _largest_to_diagonal(a, b, internal_p):
+    """The largest ground distance of a point of ``a`` or ``b`` to the diagonal, and the
+    largest persistence (which the halving cannot round to 0)."""
+    factor = diagonal_factor(internal_p)
+    largest = span = 0.0
+    for d in (a, b):
+        for i in range(len(d)):
+            span = max(span, d[i, 1] - d[i, 0])
+            largest = max(largest, (d[i, 1] - d[i, 0]) / 2.0 * factor)
+    return largest, span
 
 
 @numba.njit(cache=True)
-def _largest_to_diagonal(a, b, internal_p):
-    """The largest ground distance of a point of ``a`` or ``b`` to the diagonal."""
-    factor = diagonal_factor(internal_p)
-    largest = 0.0
-    for d in (a, b):
-        for i in range(len(d)):
-            largest = max(largest, (d[i, 1] - d[i, 0]) / 2.0 * factor)
-    return largest
+def _largest_magnitude(d, keep):
+    out = 0.0
+    for i in keep:
+        out = max(out, abs(d[i, 0]), abs(d[i, 1]))
+    return out
 
 
 @numba.njit(cache=True)
@@ -170,28 +159,57 @@ def transport(a, b, order, internal_p):
 
     Returns ``(s, total, partner)``: the distance is ``s * total^(1/order)`` and
     ``partner`` gives each point of ``a`` its partner in ``b`` or ``DIAGONAL``.
+
+    A scale below ``_SMALLEST_SCALE`` (a subnormal persistence or bottleneck distance,
+    where ``1 / s`` overflows) is avoided by solving the diagrams magnified by a power of
+    two, ``2^k``, which is exact: points on the diagonal are left out first (sending them
+    to the diagonal costs nothing, and no matching gains by using them: in every ``l_p``
+    ground metric a point is at least as far from a diagonal point as from its own
+    projection), and ``k`` is at most ``_MAGNIFY`` and keeps every coordinate below
+    ``2^1020``. Where that is not enough (coordinates near 1e300 with a subnormal
+    distance), the scale is held at the smallest normal float, finite.
     """
-    largest = _largest_to_diagonal(a, b, internal_p)
-    if 0.0 < largest < _SMALLEST_SCALE:
-        return _transport_magnified(a, b, order, internal_p)
-    return _transport_normal(a, b, order, internal_p)
+    scale, total, partner, small = _transport_scaled(a, b, order, internal_p, False)
+    if not small:
+        return scale, total, partner
+    keep_a, keep_b = _off_diagonal(a), _off_diagonal(b)
+    largest = max(_largest_magnitude(a, keep_a), _largest_magnitude(b, keep_b))
+    k = min(_MAGNIFY, 1020 - math.frexp(largest)[1])
+    if k <= 0:
+        return _transport_scaled(a, b, order, internal_p, True)[:3]
+    up = 2.0**k
+    scale, total, kept_partner, _ = _transport_scaled(
+        a[keep_a] * up, b[keep_b] * up, order, internal_p, True
+    )
+    partner = np.full(len(a), DIAGONAL, np.int64)
+    for i in range(len(keep_a)):
+        if kept_partner[i] != DIAGONAL:
+            partner[keep_a[i]] = keep_b[kept_partner[i]]
+    # One rounding into the subnormals: the distance itself, not its scale, is divided.
+    distance = scale * total ** (1.0 / order)
+    return (distance * 2.0**-k, 1.0, partner) if distance > 0.0 else (0.0, 0.0, partner)
 
 
 @numba.njit(cache=True)
-def _transport_normal(a, b, order, internal_p):
-    """:func:`transport` where ``1 / s`` cannot overflow."""
-    largest = _largest_to_diagonal(a, b, internal_p)
-    if largest == 0.0:  # every point on the diagonal
-        return 0.0, 0.0, np.full(len(a), DIAGONAL, np.int64)
+def _transport_scaled(a, b, order, internal_p, hold):
+    """:func:`transport` at a scale whose inverse is finite: ``(s, total, partner,
+    small)``, with ``small`` True (and nothing solved) when the scale would fall below
+    ``_SMALLEST_SCALE``, unless ``hold``: then the scale is held at ``2^-1022``."""
+    no_partner = np.full(len(a), DIAGONAL, np.int64)
+    largest, span = _largest_to_diagonal(a, b, internal_p)
+    if span == 0.0:  # every point on the diagonal
+        return 0.0, 0.0, no_partner, False
     if not np.isfinite(largest):  # the checks refuse such values; never solve with them
         raise ValueError("a diagram's persistence overflows float64")
-    scale = power_of_two_above(largest)
+    if span < _SMALLEST_SCALE and not hold:
+        return 0.0, 0.0, no_partner, True
+    scale = max(power_of_two_above(max(largest, _SMALLEST_NORMAL)), _SMALLEST_NORMAL)
     if order == 1.0 or order == 2.0:
         # Orders 1 and 2 keep the bits of the unscaled computation (scaling by a power
         # of two is exact) unless the optimum underflows.
         total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, np.inf)
         if total >= _TINY:
-            return scale, total, partner
+            return scale, total, partner, False
     # Other orders are always solved at the scale of the bottleneck distance: at the
     # scale of the largest persistence their optimum can be far below the costs that
     # the dual potentials carry (a distance far below the largest persistence, from
@@ -201,11 +219,14 @@ def _transport_normal(a, b, order, internal_p):
     # 2^(order / internal_p), which callers keep within float64.
     bottleneck = bottleneck_finite(a, b)
     if bottleneck == 0.0:  # a matching of cost 0, found at any order
-        return 0.0, 0.0, _optimal_transport(a, b, 1.0, internal_p, 1.0 / scale, np.inf)[1]
-    scale = bottleneck
+        partner = _optimal_transport(a, b, 1.0, internal_p, 1.0 / scale, np.inf)[1]
+        return 0.0, 0.0, partner, False
+    if bottleneck < _SMALLEST_SCALE and not hold:
+        return 0.0, 0.0, no_partner, True
+    scale = max(bottleneck, _SMALLEST_NORMAL)
     bound = (len(a) + len(b)) * 2.0 ** (order / internal_p if internal_p != np.inf else 0.0)
     total, partner = _optimal_transport(a, b, order, internal_p, 1.0 / scale, 4.0 * bound)
-    return scale, total, partner
+    return scale, total, partner, False
 
 
 @numba.njit(cache=True)
