@@ -680,3 +680,89 @@ def test_a_ply_cut_short_is_refused(tmp_path, encoding):
     path.write_bytes(data[: int(len(data) * 0.95)])
     with pytest.raises(ValueError, match=r"cut\.ply.* is not a valid \.ply mesh"):
         read_mesh_file(path)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (  # one zero-padded value of 40 KB: a block as wide as it took 3.7 GB
+            b"OFF\n3 1 0\n" + b"0" * 40000 + b"1 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+            r"vertex 0 holds a value of 40001 characters, more than 64",
+        ),
+        (
+            b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n5 0 1 2 0 " + b"0" * 100 + b"1\n",
+            r"face 0 holds a value of 101 characters",
+        ),
+        (  # 600 MB of spaces passed the bytes check, then 2.7 GB were allocated
+            b"OFF\n12000000 0 0\n" + b" " * 60_000_000,
+            r"declares 12000000 vertices and 0 faces, and 1 lines follow it",
+        ),
+        (  # comments before the keyword were read one by one, before any check
+            b"#\n" * 1_000_000 + b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+            r"line 4097: 4097 of its first 4097 lines are blank or comments",
+        ),
+    ],
+)
+def test_hostile_off_files_are_refused_before_they_cost(tmp_path, content, message):
+    path = tmp_path / "hostile.off.gz"
+    path.write_bytes(gzip.compress(content))
+    tracemalloc.start()
+    start = time.perf_counter()
+    try:
+        with pytest.raises(ValueError, match=message):
+            read_mesh_file(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 3 * len(content) + 32 * 2**20
+    assert time.perf_counter() - start < 20
+
+
+def test_off_line_ends_and_byte_order_mark_as_trimesh_reads_them(tmp_path):
+    """A lone \\r ends a line for trimesh (and Python): a file of them was refused as
+    "cut short", and a stray \\r inside a vertex line made ours read other vertices."""
+    expected = read_mesh_file(write(tmp_path / "a.off", trimesh.creation.icosphere(1)))
+    text = (tmp_path / "a.off").read_bytes()
+    for name, variant in {
+        "mac.off": text.replace(b"\n", b"\r"),
+        "bom.off": b"\xef\xbb\xbf" + text,
+        "mixed.off": text.replace(b"\n", b"\r\n", 5).replace(b"\n", b"\r", 3),
+    }.items():
+        (tmp_path / name).write_bytes(variant)
+        mesh = read_mesh_file(tmp_path / name)
+        np.testing.assert_array_equal(mesh.vertices, expected.vertices)
+        np.testing.assert_array_equal(mesh.faces, expected.faces)
+
+
+def test_the_text_bound_sees_what_trimesh_parses(tmp_path, monkeypatch):
+    """Found by an adversarial review: trimesh takes a PLY for ASCII when its second line
+    holds "ascii" anywhere (two spaces, a tab, the word alone, after 512 bytes), blank
+    lines cost it hundreds of bytes each, and Unicode line ends and spaces split values
+    that a count of ASCII whitespace missed."""
+    mesh = trimesh.creation.icosphere(1)
+    text = mesh.export(file_type="ply", encoding="ascii")
+    header_end = text.index(b"end_header\n") + len(b"end_header\n")
+    header, body = text[:header_end], text[header_end:]
+    variants = {
+        "two spaces": header.replace(b"format ascii", b"format  ascii"),
+        "tab": header.replace(b"format ascii", b"format\tascii"),
+        "alone": header.replace(b"format ascii 1.0", b"ascii"),
+        "far": header.replace(b"ply\n", b"ply" + b" " * 600 + b"\n", 1),
+    }
+    monkeypatch.setattr(reading, "MAX_TEXT_TOKENS", 200)
+    for name, variant in variants.items():
+        path = tmp_path / f"{name.replace(' ', '_')}.ply"
+        path.write_bytes(variant + body)
+        assert len(trimesh.load(path, process=False, force="mesh").faces) == len(mesh.faces)
+        with pytest.raises(ValueError, match=r"values as text, more than MAX_TEXT_TOKENS"):
+            read_mesh_file(path)
+    monkeypatch.setattr(reading, "MAX_TEXT_TOKENS", 16 * 1024**2)
+    monkeypatch.setattr(reading, "MAX_TEXT_LINES", 10_000)
+    blank = tmp_path / "blank.ply"
+    blank.write_bytes(text + b"\n" * 20_000)
+    with pytest.raises(ValueError, match=r"20\d\d\d lines as text, more than MAX_TEXT_LINES"):
+        read_mesh_file(blank)
+    separated = "v 0 0 0\n" + "".join("v 1\u20282\u2028" for _ in range(6000))
+    tokens, lines = reading.count_text(separated.encode())
+    assert tokens >= 18_004 and lines >= 12_001  # what str.split and splitlines find
+    assert reading.count_text("v 1\u00a02\u00a03".encode())[0] == 4  # no-break spaces

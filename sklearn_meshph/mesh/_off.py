@@ -26,8 +26,10 @@ import numpy as np
 __all__ = ["read_off"]
 
 _KEYWORD = re.compile(rb"(ST)?C?N?OFF")
-# Lines converted at once: bounds the memory of the tokens held as Python objects.
+# Lines (vertices) or values (faces' corners) converted at once: bounds the memory of
+# the values held as Python objects.
 _BLOCK = 1 << 15
+_BLOCK_VALUES = 1 << 17
 # Fewest bytes a vertex line ("0 0 0") and a face line ("3 0 1 2") take, line end
 # excluded: a header cannot declare more of them than the file can hold.
 _VERTEX_BYTES, _FACE_BYTES = 5, 7
@@ -35,6 +37,10 @@ _VERTEX_BYTES, _FACE_BYTES = 5, 7
 _LINES_PER_ELEMENT, _SPARE_LINES = 16, 4096
 #: Most corners of one face (a polygon of more is refused, not split into tokens).
 MAX_FACE_CORNERS = 1 << 16
+#: Longest value, in bytes: a block of values is converted as fixed-width byte strings,
+#: as wide as its longest value (one zero-padded value of 40 KB made a block of vertex
+#: lines take 3.7 GB).
+MAX_VALUE_LENGTH = 64
 
 
 class _Lines:
@@ -45,7 +51,7 @@ class _Lines:
     def __init__(self, data: bytes, where: str):
         self._lines = iter(io.BytesIO(data))
         self._comments = b"#" in data
-        self.number = 0
+        self.number = self.held = 0
         self.where = where
 
     def next_line(self) -> bytes | None:
@@ -56,7 +62,15 @@ class _Lines:
                 if comment >= 0:
                     line = line[:comment]
             if line and not line.isspace():
+                self.held += 1
                 return line
+            if self.number - self.held > _SPARE_LINES + _LINES_PER_ELEMENT * self.held:
+                # Each is read on its own: gigabytes of them would take minutes.
+                raise self.error(
+                    f"{self.number - self.held} of its first {self.number} lines are blank "
+                    f"or comments, more than {_SPARE_LINES} plus {_LINES_PER_ELEMENT} per "
+                    "line of data"
+                )
         return None
 
     def error(self, problem: str) -> ValueError:
@@ -99,8 +113,26 @@ def _counts(lines: _Lines, size: int) -> tuple[int, int]:
     return n_vertices, n_faces
 
 
+def _check_line_count(data: bytes, lines: _Lines, n_vertices: int, n_faces: int) -> None:
+    """Before anything is allocated from the header: the file must have a line per
+    declared vertex and face after the header."""
+    remaining = data.count(b"\n") + 1 - lines.number
+    if remaining < n_vertices + n_faces:
+        raise lines.error(
+            f"the header declares {n_vertices} vertices and {n_faces} faces, and {remaining} "
+            "lines follow it (is it cut short?)"
+        )
+
+
 def _numbers(rows: list[list[bytes]], dtype, where: str, first: int, what: str) -> np.ndarray:
     """``rows`` of equal length as an array of ``dtype``; a bad value names its row."""
+    for k, row in enumerate(rows):
+        for value in row:
+            if len(value) > MAX_VALUE_LENGTH:
+                raise ValueError(
+                    f"{where}: {what} {first + k} holds a value of {len(value)} characters, "
+                    f"more than {MAX_VALUE_LENGTH} (MAX_VALUE_LENGTH)"
+                )
     try:
         return np.array(rows, dtype=bytes).astype(dtype)
     except (ValueError, OverflowError):
@@ -134,19 +166,8 @@ def _vertices(lines: _Lines, n_vertices: int) -> np.ndarray:
     return vertices
 
 
-def _checked_corners(corners: np.ndarray, n_vertices: int, where: str, face: int) -> None:
-    bad = (corners < 0) | (corners >= n_vertices)
-    if bad.any():
-        row = np.flatnonzero(bad.reshape(len(bad), -1).any(axis=1))[0]
-        value = corners[row][bad[row]][0] if corners.ndim == 2 else corners[row]
-        raise ValueError(
-            f"{where}: face {face + (row if corners.ndim == 2 else 0)} uses vertex {value}, "
-            f"outside 0..{n_vertices - 1}"
-        )
-
-
-def _polygon(line: bytes, lines: _Lines, face: int, n_vertices: int) -> np.ndarray:
-    """The corners of one face line (its count first)."""
+def _corner_count(line: bytes, lines: _Lines, face: int) -> tuple[int, list[bytes]]:
+    """The number of corners of a face line and its corners' values (as bytes)."""
     head = line.split(None, 1)
     try:
         count = int(head[0])
@@ -159,37 +180,70 @@ def _polygon(line: bytes, lines: _Lines, face: int, n_vertices: int) -> np.ndarr
     values = head[1].split(None, count)[:count] if len(head) > 1 else []
     if len(values) < count:
         raise lines.error(f"face {face} declares {count} corners and lists {len(values)}")
-    corners = _numbers([values], np.int64, lines.where, face, "face")[0]
-    _checked_corners(corners, n_vertices, lines.where, face)
-    return corners
+    return count, values
+
+
+def _fans(values: list[bytes], counts: list[int], first: int, lines: _Lines, n_vertices: int):
+    """Triangles of faces ``first...`` given their corners' values and counts: a fan from
+    each face's first corner, in the file's order."""
+    counts = np.array(counts, dtype=np.int64)
+    face_of = np.repeat(np.arange(first, first + len(counts)), counts)
+    corners = _corner_values(values, face_of, lines)
+    bad = (corners < 0) | (corners >= n_vertices)
+    if bad.any():
+        at = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"{lines.where}: face {face_of[at]} uses vertex {corners[at]}, outside "
+            f"0..{n_vertices - 1}"
+        )
+    if (counts == 3).all():
+        return corners.reshape(-1, 3)
+    n_triangles = counts - 2
+    starts = np.cumsum(counts) - counts
+    owner = np.repeat(np.arange(len(counts)), n_triangles)
+    step = np.arange(len(owner)) - np.repeat(np.cumsum(n_triangles) - n_triangles, n_triangles)
+    apex = starts[owner]
+    return np.column_stack([corners[apex], corners[apex + step + 1], corners[apex + step + 2]])
+
+
+def _corner_values(values: list[bytes], face_of: np.ndarray, lines: _Lines) -> np.ndarray:
+    for k, value in enumerate(values):
+        if len(value) > MAX_VALUE_LENGTH:
+            raise ValueError(
+                f"{lines.where}: face {face_of[k]} holds a value of {len(value)} characters, "
+                f"more than {MAX_VALUE_LENGTH} (MAX_VALUE_LENGTH)"
+            )
+    try:
+        return np.array(values, dtype=bytes).astype(np.int64)
+    except (ValueError, OverflowError):
+        for k, value in enumerate(values):  # name the first bad value (rare path)
+            try:
+                np.array([value], dtype=bytes).astype(np.int64)
+            except (ValueError, OverflowError):
+                raise ValueError(
+                    f"{lines.where}: face {face_of[k]} holds a value that is not a number of "
+                    f"that kind: {value[:80].decode('latin-1')!r}"
+                ) from None
+        raise
 
 
 def _faces(lines: _Lines, n_faces: int, n_vertices: int) -> np.ndarray:
-    blocks = []
-    for start in range(0, n_faces, _BLOCK):
-        rows, polygons = [], []
-        for k in range(start, min(start + _BLOCK, n_faces)):
-            line = lines.next_line()
-            if line is None:
-                raise lines.ended(k, n_faces, "faces")
-            tokens = line.split(None, 4)
-            if tokens[0] == b"3" and len(tokens) >= 4 and not polygons:
-                rows.append(tokens[1:4])
-                continue
-            if rows:  # from the first polygon on, the block goes face by face
-                triangles = _numbers(rows, np.int64, lines.where, start, "face")
-                _checked_corners(triangles, n_vertices, lines.where, start)
-                polygons.extend(triangles)
-                rows = []
-            polygons.append(_polygon(line, lines, k, n_vertices))
-        if rows:
-            triangles = _numbers(rows, np.int64, lines.where, start, "face")
-            _checked_corners(triangles, n_vertices, lines.where, start)
-            blocks.append(triangles)
+    blocks, values, counts, first = [], [], [], 0
+    for face in range(n_faces):
+        line = lines.next_line()
+        if line is None:
+            raise lines.ended(face, n_faces, "faces")
+        tokens = line.split(None, 4)
+        if tokens[0] == b"3" and len(tokens) >= 4:
+            values.extend(tokens[1:4])
+            counts.append(3)
         else:
-            blocks.extend(
-                np.column_stack([np.full(len(p) - 2, p[0]), p[1:-1], p[2:]]) for p in polygons
-            )
+            count, corners = _corner_count(line, lines, face)
+            values.extend(corners)
+            counts.append(count)
+        if len(values) >= _BLOCK_VALUES or face == n_faces - 1:
+            blocks.append(_fans(values, counts, first, lines, n_vertices))
+            values, counts, first = [], [], face + 1
     return np.concatenate(blocks) if blocks else np.empty((0, 3), np.int64)
 
 
@@ -199,6 +253,10 @@ def read_off(data: bytes, where: str) -> tuple[np.ndarray, np.ndarray]:
     ``where`` names the file in errors. Raises ``ValueError`` on a file that is not OFF,
     declares more than it holds, ends early, or holds a value that is not a number.
     """
+    if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark, as trimesh reads it
+        data = data[3:]
+    if b"\r" in data:  # line ends \r\n or a lone \r, as trimesh (and Python) read them
+        data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     lines = _Lines(data, where)
     n_vertices, n_faces = _counts(lines, len(data))
     held = data.count(b"\n")
@@ -210,4 +268,5 @@ def read_off(data: bytes, where: str) -> tuple[np.ndarray, np.ndarray]:
             f"faces its header declares: more than {_LINES_PER_ELEMENT} per vertex or face "
             "(blank or comment lines beyond any use)"
         )
+    _check_line_count(data, lines, n_vertices, n_faces)
     return _vertices(lines, n_vertices), _faces(lines, n_faces, n_vertices)

@@ -31,10 +31,12 @@ from ._off import read_off
 __all__ = [
     "COMPRESSIONS",
     "MAX_DECOMPRESSED_SIZE",
+    "MAX_TEXT_LINES",
     "MAX_TEXT_TOKENS",
     "MESH_FORMATS",
     "LimitedReader",
     "decompress",
+    "count_text",
     "count_tokens",
     "read_mesh_file",
     "split_compression",
@@ -51,11 +53,13 @@ _ZIP_MAGIC = (b"PK\x03\x04", b"PK\x05\x06", b"PK\x07\x08")
 #: small hostile file (a "compression bomb") cannot exhaust memory.
 MAX_DECOMPRESSED_SIZE = 2 * 1024**3
 
-#: Most values (whitespace-separated tokens) of a mesh file that trimesh parses as text
-#: (OBJ, ASCII PLY and STL): 32 Mi values, about 300 MB of typical text, bound the
-#: parser's memory to about 3 GB whatever the content. OFF files are read by our own
-#: reader (``_off.py``), whose memory is that of the mesh.
-MAX_TEXT_TOKENS = 32 * 1024**2
+#: Most values (whitespace-separated tokens) and lines of a mesh file that trimesh
+#: parses as text (OBJ, ASCII PLY and STL): 16 Mi values and 8 Mi lines (a PLY of 1.2
+#: million vertices and 2.4 million faces fits) bound the parser's memory to about 3 GB
+#: whatever the content. OFF files are read by our own reader (``_off.py``), whose
+#: memory is that of the mesh.
+MAX_TEXT_TOKENS = 16 * 1024**2
+MAX_TEXT_LINES = 8 * 1024**2
 
 #: File name endings of the compressed formats read, and their standard-library openers.
 COMPRESSIONS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
@@ -148,38 +152,63 @@ def decompress(path, compression: str, place: str, limit: int, what: str = "mesh
 
 
 def _is_text(buffer, file_type: str) -> bool:
-    """Whether trimesh parses this content as text (into a Python object per value)."""
-    head = bytes(buffer[:512]).lower()
-    if file_type == "ply":
-        return b"format ascii" in head
+    """Whether trimesh parses this content as text (into Python objects per value and
+    per line), decided as trimesh decides."""
+    if file_type == "ply":  # trimesh: "ascii" anywhere in the second line
+        head = bytes(buffer[: 1 << 16])
+        first = head.find(b"\n")
+        second = head.find(b"\n", first + 1)
+        return first < 0 or second < 0 or b"ascii" in head[first + 1 : second].lower()
     if file_type == "stl":  # a binary STL's size is fixed by its triangle count
         size = buffer.nbytes
         return size < 84 or size != 84 + 50 * int.from_bytes(bytes(buffer[80:84]), "little")
     return file_type == "obj"
 
 
-def count_tokens(buffer) -> int:
-    """Number of whitespace-separated tokens in ``buffer``, counted a chunk at a time
-    (no copy of the content)."""
+# Bytes that may end a line for Python's str.splitlines (in UTF-8, U+0085, U+2028 and
+# U+2029 end with 0x85, 0xA8 and 0xA9: counting those bytes over-counts, never under).
+_LINE_ENDS = np.frombuffer(b"\n\r\x0b\x0c\x1c\x1d\x1e\x85\xa8\xa9", np.uint8)
+
+
+def count_text(buffer) -> tuple[int, int]:
+    """Upper bounds of the values (whitespace-separated tokens) and lines that Python's
+    ``str.split`` and ``str.splitlines`` find in ``buffer`` decoded, counted a chunk at a
+    time (no copy of the content): every byte at most 32 or above 127 is taken for a
+    separator (Unicode spaces and line ends are non-ASCII in UTF-8)."""
     data = np.frombuffer(buffer, np.uint8)
-    count, previous_blank = 0, True
+    tokens = lines = 0
+    previous_blank = True
     for start in range(0, len(data), _CHUNK * 16):
-        blank = data[start : start + _CHUNK * 16] <= 32  # space, tabs, line ends, NUL...
-        count += int(np.count_nonzero(blank[1:] < blank[:-1])) + (previous_blank and not blank[0])
+        chunk = data[start : start + _CHUNK * 16]
+        blank = (chunk <= 32) | (chunk >= 128)
+        tokens += int(np.count_nonzero(blank[1:] < blank[:-1])) + (previous_blank and not blank[0])
+        lines += int(np.count_nonzero(np.isin(chunk, _LINE_ENDS)))
         previous_blank = bool(blank[-1])
-    return count
+    return tokens, lines + 1
 
 
-def _check_text_tokens(buffer, file_type: str, place: str, path: str) -> None:
-    """Refuse a text mesh with more than ``MAX_TEXT_TOKENS`` values before trimesh
-    parses it: its text parsers hold a Python object per value (up to 46 bytes of
-    memory per byte of file, measured on an ASCII PLY of one-digit values)."""
-    if _is_text(buffer, file_type) and (tokens := count_tokens(buffer)) > MAX_TEXT_TOKENS:
-        raise ValueError(
-            f"{place}: mesh file {path!r} holds {tokens} values as text, more than "
-            f"MAX_TEXT_TOKENS ({MAX_TEXT_TOKENS}); refusing to parse it (a binary .ply "
-            "holds any size)"
-        )
+def count_tokens(buffer) -> int:
+    """The values of :func:`count_text`."""
+    return count_text(buffer)[0]
+
+
+def _check_text_size(buffer, file_type: str, place: str, path: str) -> None:
+    """Refuse a text mesh with more than ``MAX_TEXT_TOKENS`` values or
+    ``MAX_TEXT_LINES`` lines before trimesh parses it: its text parsers hold Python
+    objects per value (about 150 bytes each for OBJ) and per line (170 to 420 bytes for
+    an ASCII PLY, whatever the line holds, blank lines included)."""
+    if not _is_text(buffer, file_type):
+        return
+    tokens, lines = count_text(buffer)
+    for count, limit, what, name in (
+        (tokens, MAX_TEXT_TOKENS, "values", "MAX_TEXT_TOKENS"),
+        (lines, MAX_TEXT_LINES, "lines", "MAX_TEXT_LINES"),
+    ):
+        if count > limit:
+            raise ValueError(
+                f"{place}: mesh file {path!r} holds {count} {what} as text, more than "
+                f"{name} ({limit}); refusing to parse it (a binary .ply holds any size)"
+            )
 
 
 def _check_ply_counts(loaded, invalid: str) -> None:
@@ -288,7 +317,7 @@ def read_mesh_file(
         if len(faces) == 0:
             raise ValueError(f"{invalid}: it contains no triangles")
         return trimesh.Trimesh(vertices, faces, process=False)
-    _check_text_tokens(source.getbuffer(), file_type, place, path)
+    _check_text_size(source.getbuffer(), file_type, place, path)
     try:
         loaded = trimesh.load(source, file_type=file_type, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on malformed files
