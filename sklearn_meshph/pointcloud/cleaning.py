@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh import DEGENERATE_SINE
-from ..mesh._geometry import unit_box
+from ..mesh import DEGENERATE_SINE, unit_box
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
