@@ -46,6 +46,8 @@ def _within_fences(points: np.ndarray) -> np.ndarray:
 #: A cloud whose box is this many times the box of its points within Tukey's fences is
 #: put in the unit box of those points (see :func:`cloud_unit_box`).
 FAR_BOX_RATIO = 1e6
+#: ... and when at most this share of its points is outside those fences.
+FAR_SHARE = 0.1
 # Unit-box coordinates of far points are clipped here (they are dropped as far points).
 _FAR_CLIP = 1e12
 
@@ -54,18 +56,24 @@ def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float]:
     """:func:`sklearn_meshph.mesh._geometry.unit_box` of a cloud, robust to far points.
 
     The unit box of every point, unless the box is more than ``FAR_BOX_RATIO`` times
-    that of the points within Tukey's fences: then one outlier at 1e100 times the
-    shape's size centred the box so far away that subtracting its centre cancelled every
-    digit of the shape's coordinates. The box is then that of the points within the
+    that of the points within Tukey's fences, which have some extent, and at most
+    ``FAR_SHARE`` of the points are outside them (else the fences were drawn around a
+    cluster of duplicates, not the shape). One outlier at 1e100 times the shape's size
+    centred the whole box so far away that subtracting its centre cancelled every digit
+    of the shape's coordinates. The box is then that of the points within the
     fences, and the far points' coordinates in it are clipped at ``_FAR_CLIP`` (they are
     dropped as far points; clipping keeps them finite and far).
     """
     unit, scale = unit_box(points)
     bulk = _within_fences(points)
-    if len(bulk) == len(points):
+    outside = len(points) - len(bulk)
+    # Far points are few. When many points are outside, the fences were drawn around a
+    # cluster of (near-)duplicates, not the shape: its box is not the shape's.
+    if outside == 0 or outside > FAR_SHARE * len(points):
         return unit, scale
     bulk_unit, bulk_scale = unit_box(bulk)
-    if not 0.0 < bulk_scale * FAR_BOX_RATIO < scale:
+    extent = float(np.ptp(bulk, axis=0).max())
+    if not (extent > 0.0 and 0.0 < bulk_scale * FAR_BOX_RATIO < scale):
         return unit, scale
     low, high = bulk.min(axis=0), bulk.max(axis=0)
     with np.errstate(over="ignore"):
