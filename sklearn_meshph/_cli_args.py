@@ -274,14 +274,20 @@ def check_output(output: Path) -> None:
         raise UsageError(f"--output {str(output)!r} exists and is not a folder")
     for name in RESULT_FILES:  # checked now: a FIFO there would hang the job at its end
         inside = output / name
-        if (inside.exists() or inside.is_symlink()) and not inside.is_file():
+        if inside.is_symlink() or (inside.exists() and not inside.is_file()):
             raise UsageError(
                 f"--output {str(output)!r} holds {name!r}, which is not a regular file (a "
-                "folder, a FIFO, a device or a broken link): the results would be written "
-                "there; remove it or choose another --output"
+                "link, a folder, a FIFO or a device): the results would be written there "
+                "(through a link, over the file it names); remove it or choose another "
+                "--output"
             )
     existing = output
     while not existing.exists() and existing != existing.parent:
+        if existing.is_symlink():  # a link to nothing, a chain or a loop of links
+            raise UsageError(
+                f"--output {str(output)!r} is under {str(existing)!r}, a symbolic link to "
+                "nothing (or a loop of links)"
+            )
         existing = existing.parent
     if not existing.is_dir():
         raise UsageError(f"--output {str(output)!r} is under {str(existing)!r}, which is a file")

@@ -184,6 +184,9 @@ def cross_validate(model, y, folds, neighbors, random_state):
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m sklearn_meshph`` and the ``sklearn-meshph`` script."""
+    for name in ("stdout", "stderr"):  # started with `>&-`: Python has no stream at all
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (for the whole run)
     try:
         try:
             status = _main(argv)
@@ -193,10 +196,12 @@ def main(argv: list[str] | None = None) -> int:
         _silence_stdout()
         _tell("stopped: standard output was closed by its reader")
         return 141  # as a program ended by SIGPIPE, so that `set -o pipefail` sees it
-    except OSError as exc:  # the results' folder or standard output cannot be written
+    except OSError as exc:  # a file that cannot be read or written, or standard output
         _silence_stdout()
-        where = f": {exc.filename!r}" if exc.filename else " (standard output)"
-        _tell(f"error: cannot write{where}: {exc.strerror or exc}")
+        if exc.filename:
+            _tell(f"error: {exc.strerror or exc}: {exc.filename!r}")
+        else:
+            _tell(f"error: {exc.strerror or exc} (writing the results or standard output)")
         return 1
     except KeyboardInterrupt:  # Ctrl-C: one line, not the traceback of wherever it was
         _tell("interrupted")

@@ -574,10 +574,10 @@ def test_a_full_standard_output_is_one_line_not_a_traceback(tmp_path):
         )
     stderr = process.stderr.decode()
     assert process.returncode == 1, stderr
-    assert stderr == "error: cannot write (standard output): No space left on device\n"
+    assert stderr == "error: No space left on device (writing the results or standard output)\n"
 
 
-@pytest.mark.parametrize("kind", ["fifo", "folder", "broken link"])
+@pytest.mark.parametrize("kind", ["fifo", "folder", "broken link", "link to a file"])
 def test_an_output_that_would_hang_or_fail_at_the_end_is_refused_first(tmp_path, capfd, kind):
     """A FIFO named like a result file hung the job after its whole run; a folder or a
     broken link there failed with a traceback after it."""
@@ -588,6 +588,9 @@ def test_an_output_that_would_hang_or_fail_at_the_end_is_refused_first(tmp_path,
         os.mkfifo(inside)
     elif kind == "folder":
         inside.mkdir()
+    elif kind == "link to a file":  # written through, over the file it names
+        (tmp_path / "precious.txt").write_text("keep")
+        inside.symlink_to(tmp_path / "precious.txt")
     else:
         inside.symlink_to(tmp_path / "nowhere")
     assert main(["--output", str(output), "--no-plots"]) == 2
@@ -597,6 +600,28 @@ def test_an_output_that_would_hang_or_fail_at_the_end_is_refused_first(tmp_path,
     link.symlink_to(tmp_path / "nowhere")
     assert main(["--output", str(link), "--no-plots"]) == 2
     assert "is a symbolic link to nothing" in capfd.readouterr().err
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)
+    assert main(["--output", str(loop / "sub"), "--no-plots"]) == 2
+    assert "a symbolic link to nothing (or a loop of links)" in capfd.readouterr().err
+
+
+def test_closed_standard_streams_are_not_a_traceback(tmp_path):
+    """Started with `>&-` or `2>&-`, Python has no sys.stdout or sys.stderr: the job
+    ended in an AttributeError traceback (or silently, without results)."""
+    argv = ["-m", "sklearn_meshph", "--n-per-class", "2", "--folds", "2", "--no-plots"]
+    for stream, name in ((1, "a"), (2, "b")):
+        process = subprocess.run(
+            [sys.executable, *argv, "--output", str(tmp_path / name), "--n-jobs", "1"],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE if stream == 2 else None,
+            stderr=subprocess.PIPE if stream == 1 else None,
+            timeout=300,
+            pass_fds=(),
+            preexec_fn=lambda stream=stream: os.close(stream),
+        )
+        assert process.returncode == 0, (process.stdout, process.stderr)
+        assert (tmp_path / name / "summary.json").is_file()
 
 
 def test_pictures_say_what_they_show(tmp_path, monkeypatch):
