@@ -17,7 +17,14 @@ from numbers import Integral, Real
 
 import numpy as np
 
-__all__ = ["HasMethods", "Interval", "InvalidParameterError", "Options", "validate_params"]
+__all__ = [
+    "HasMethods",
+    "Interval",
+    "InvalidParameterError",
+    "Numbers",
+    "Options",
+    "validate_params",
+]
 
 
 class InvalidParameterError(ValueError, TypeError):
@@ -67,6 +74,35 @@ class Options:
 
     def __str__(self) -> str:
         return "one of " + ", ".join(repr(o) for o in self.options)
+
+
+class Numbers:
+    """A sequence of numbers: a tuple, a list or a 1-D array of real numbers (no bools,
+    no strings), of ``length`` entries when given; ``None`` entries (an end to learn)
+    are allowed with ``none=True``. NaN passes: where it is allowed, the caller says
+    what it means."""
+
+    def __init__(self, length: int | None = None, *, none: bool = False):
+        self.length, self.none = length, none
+
+    def __call__(self, value) -> bool:
+        if isinstance(value, np.ndarray):
+            if value.ndim != 1 or value.dtype.kind not in "iuf":
+                return False
+        elif not isinstance(value, tuple | list):
+            return False
+        if self.length is not None and len(value) != self.length:
+            return False
+        return all(
+            (self.none and item is None)
+            or (isinstance(item, Real) and not isinstance(item, bool | np.bool_))
+            for item in value
+        )
+
+    def __str__(self) -> str:
+        size = "" if self.length is None else f"{self.length} "
+        extra = " (each possibly None)" if self.none else ""
+        return f"a tuple, list or 1-D array of {size}numbers{extra}"
 
 
 class HasMethods:

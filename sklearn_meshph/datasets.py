@@ -14,7 +14,7 @@ import numpy as np
 import trimesh
 from sklearn.utils import Bunch, check_random_state
 
-from ._param_validation import Interval, Options, validate_params
+from ._param_validation import Interval, Numbers, Options, validate_params
 from ._progress import map_samples
 from .mesh.reading import COMPRESSIONS
 from .mesh.validation import check_mesh
@@ -328,11 +328,15 @@ def _shape(name, rng, resolution):
     return trimesh.Trimesh(vertices, sphere.faces, process=False)
 
 
+#: Most rings and segments of a :func:`make_shapes` sphere (a million vertices).
+MAX_SHAPE_RESOLUTION = 1000
+
+
 @validate_params(
     {
         "n_per_class": [Interval(Integral, 1, None, closed="left")],
         "classes": [tuple, list, None],
-        "resolution": [tuple, list, np.ndarray],
+        "resolution": [Numbers(2)],
         "noise": [Interval(Real, 0, None, closed="left")],
         "random_state": ["random_state"],
         "return_X_y": ["boolean"],
@@ -387,6 +391,16 @@ def make_shapes(
     >>> len(meshes), y.tolist()
     (12, [0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5])
     """
+    low, high = resolution
+    if not (
+        isinstance(low, Integral)
+        and isinstance(high, Integral)
+        and 3 <= low <= high <= MAX_SHAPE_RESOLUTION
+    ):
+        raise ValueError(
+            f"resolution must be two ints 3 <= low <= high <= {MAX_SHAPE_RESOLUTION} "
+            f"(MAX_SHAPE_RESOLUTION: rings and segments of a UV sphere), got {resolution!r}"
+        )
     names = tuple(_CLASSES) if classes is None else tuple(classes)
     unknown = [c for c in names if c not in _CLASSES]
     if unknown:

@@ -7,11 +7,10 @@ from __future__ import annotations
 import os
 from numbers import Integral
 
-import numpy as np
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.pipeline import FeatureUnion, Pipeline
 
-from ._param_validation import HasMethods, Interval, Options, validate_params
+from ._param_validation import HasMethods, Interval, Numbers, Options, validate_params
 from .leaf_forest import LeafSizeForest
 from .persistence import LowerStarPersistence
 from .size_switch import SizeSwitchClassifier
@@ -60,7 +59,7 @@ def graph_eigen(eigen: dict, times=GRAPH_TIMES) -> LaplacianEigenTransformer:
 
 @validate_params(
     {
-        "times": [tuple, list, np.ndarray],
+        "times": [Numbers()],
         "classifier": [Options(("auto", "kernels", "trees"))],
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],

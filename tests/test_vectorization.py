@@ -428,7 +428,7 @@ def test_one_weight_convention_for_images_and_kernels():
             "PersistenceImage(resolution=(100000, 100000))",
             r"resolution must be 2 ints from 1 to 4096 \(MAX_PIXELS\)",
         ),
-        ("PersistenceImage(resolution=(True, 2))", r"resolution must be 2 ints"),
+        ("PersistenceImage(resolution=(True, 2))", r"'resolution' parameter of PersistenceImage"),
     ],
 )
 def test_sizes_beyond_memory_are_refused_by_name(estimator, message):
@@ -471,3 +471,38 @@ def test_sequences_of_numbers_may_be_arrays():
         )
     assert len(make_graph_classifier(times=np.array([0.1, 10.0])).get_params()["eigen__times"]) == 2
     assert len(make_shapes(1, resolution=np.array([8, 16]), return_X_y=True)[0]) == 6
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        "KernelSumSVC(C=np.array(1.0))",
+        "KernelSumSVC(C=np.ones((2, 1)))",
+        "PersistenceImage(resolution=np.array(5))",
+        "PersistenceImage(im_range=np.ones((4, 1)))",
+        "PersistenceImage(im_range=np.array(['0', '1', '0', '1']))",
+        "BettiCurve(sample_range=np.array(1.0))",
+        "BettiCurve(sample_range=(True, 1.0))",
+        "DiagramStatistics(quantiles=('0.5',))",
+        "PersistenceLandscape(n_landscapes=np.int32(4096), resolution=np.int32(2**20))",
+    ],
+)
+def test_badly_shaped_sequences_are_refused_by_name(make):
+    """Found by an adversarial review: accepting 1-D arrays let 0-d, 2-D and string
+    arrays through to raw TypeErrors, and an int32 product wrapped past the size bound."""
+    import sklearn_meshph
+    from sklearn_meshph import KernelSumSVC  # noqa: F401 (named in the strings)
+
+    model = eval(make, {**vars(sklearn_meshph), "np": np})
+    data = np.zeros((4, 4, 1)) if make.startswith("Kernel") else [np.array([[0.0, 1.0]])]
+    target = [0, 0, 1, 1] if make.startswith("Kernel") else None
+    with pytest.raises(ValueError, match=r"parameter of|more than MAX_LANDSCAPE"):
+        model.fit(data, target)
+
+
+def test_make_shapes_resolution_is_checked():
+    from sklearn_meshph import make_shapes
+
+    for bad in ((1, 1), (5, 6, 7), (0, 0), (3000, 3000), (40, 18), np.array([[5, 6]])):
+        with pytest.raises(ValueError, match="resolution"):
+            make_shapes(1, resolution=bad)

@@ -42,7 +42,7 @@ _BLOCK = 4096  # lines parsed at a time
 #: Most blank or comment lines of a text point-cloud file, beyond ``_SKIPPED_PER_POINT``
 #: per point: each is read on its own, and 512 MiB of them took 5 minutes to refuse.
 MAX_SKIPPED_LINES = 1_000_000
-_SKIPPED_PER_POINT = 16
+_SKIPPED_PER_POINT = 4
 
 #: Longest line read, in bytes: thousands of numbers, far more than a point's columns.
 #: A longer line (a file with carriage returns only for line ends, or junk) is refused

@@ -7,7 +7,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._param_validation import Interval
+from .._param_validation import Interval, Numbers
 from ._base import (
     COMMON_CONSTRAINTS,
     PackedVectorizer,
@@ -53,7 +53,7 @@ def _sample_grid(points, resolution, sample_range, keep_endpoints) -> np.ndarray
 
 _GRID_CONSTRAINTS: dict = {
     "resolution": [Interval(Integral, 1, MAX_RESOLUTION, closed="both")],
-    "sample_range": [tuple, list, np.ndarray, None],
+    "sample_range": [Numbers(2, none=True), None],
     "keep_endpoints": ["boolean"],
     **COMMON_CONSTRAINTS,
 }
@@ -178,7 +178,7 @@ class PersistenceLandscape(_GridFunction):
 
     def _check_params(self) -> None:
         super()._check_params()
-        if self.n_landscapes * self.resolution > MAX_LANDSCAPE_VALUES:
+        if int(self.n_landscapes) * int(self.resolution) > MAX_LANDSCAPE_VALUES:
             raise ValueError(
                 f"PersistenceLandscape: n_landscapes * resolution = {self.n_landscapes} * "
                 f"{self.resolution} values per diagram, more than MAX_LANDSCAPE_VALUES "

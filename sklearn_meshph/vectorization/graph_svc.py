@@ -15,7 +15,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, check_random_state
 
 from .._base import ClassifierScoreMixin, median_scale
-from .._param_validation import Interval, Options, check_params
+from .._param_validation import Interval, Numbers, Options, check_params
 from ._base import BANDWIDTH
 
 __all__ = ["KernelSumSVC"]
@@ -91,7 +91,7 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
     _parameter_constraints = {
         "groups": [tuple, list, np.ndarray, Options(("graph",)), None],
         "bandwidth": BANDWIDTH,
-        "C": [tuple, list, np.ndarray],
+        "C": [Numbers()],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "max_selection_samples": [Interval(Integral, 2, None, closed="left")],
         "random_state": ["random_state"],

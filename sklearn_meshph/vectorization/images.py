@@ -6,7 +6,7 @@ from numbers import Integral
 
 import numpy as np
 
-from .._param_validation import Options
+from .._param_validation import Numbers, Options
 from ._base import (
     BANDWIDTH,
     COMMON_CONSTRAINTS,
@@ -92,8 +92,8 @@ class PersistenceImage(PackedVectorizer):
 
     _parameter_constraints: dict = {
         "bandwidth": BANDWIDTH,
-        "resolution": [tuple, list, np.ndarray],
-        "im_range": [tuple, list, np.ndarray, None],
+        "resolution": [Numbers(2)],
+        "im_range": [Numbers(4, none=True), None],
         "sampling": [Options(("point", "pixel"))],
         **WEIGHT_CONSTRAINTS,
         **COMMON_CONSTRAINTS,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._param_validation import Numbers
 from ._base import COMMON_CONSTRAINTS, PackedVectorizer, common_sections
 from ._compiled import entropies, statistics
 
@@ -108,7 +109,7 @@ class DiagramStatistics(_Summary):
     array([[2., 4., 3., 2., 2., 0., 2.]])
     """
 
-    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [tuple, list, np.ndarray]}
+    _parameter_constraints: dict = {**COMMON_CONSTRAINTS, "quantiles": [Numbers()]}
 
     def __init__(
         self,
