@@ -312,3 +312,22 @@ def test_naming_the_bad_line_of_a_large_file_holds_no_list_of_its_lines(tmp_path
     finally:
         tracemalloc.stop()
     assert peak < 8 * len(content) + 64 * 2**20
+
+
+@pytest.mark.parametrize("line", [b"1" * 50_000_000, b"1," * 25_000_000])
+def test_a_line_longer_than_any_tu_line_is_refused_before_parsing(tmp_path, line):
+    """Found by an adversarial review: NumPy's parser, and the error path after it, took
+    13 to 20 bytes per byte of one long line (a 194 KB gzip reached a MemoryError)."""
+    import tracemalloc
+
+    content = b"1, 2\n" + line + b"\n"
+    path = tmp_path / "DS_A.txt.gz"
+    path.write_bytes(gzip.compress(content))
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=r"the line at byte 5 is longer than 1048576 bytes"):
+            reading._table(str(path), np.int64, 2, "dataset")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 3 * len(content)

@@ -30,7 +30,7 @@ import numpy as np
 from ..mesh.reading import COMPRESSIONS, decompress, split_compression
 from .validation import Graph
 
-__all__ = ["MAX_TU_FILE_SIZE", "load_tu_dataset", "tu_dataset_names"]
+__all__ = ["MAX_TU_FILE_SIZE", "MAX_TU_LINE", "load_tu_dataset", "tu_dataset_names"]
 
 #: Largest size of one file of a TU dataset, in bytes (512 MiB, as for point-cloud text),
 #: decompressed. Loading peaks near 9 times the edge file's size for its shortest lines
@@ -80,8 +80,13 @@ def _content(path: str, place: str) -> bytes:
 
 
 _BLANK_LINES = re.compile(rb"(?m)^[ \t\f\v]*(?:\n|\Z)")
+_MAX_WIDTH = 1 << 16  # values of one line looked at, on the error path
+_CHUNK_OF_LINES = 1 << 20
+#: Longest line of a TU file, in bytes (1 MiB: tens of thousands of attributes).
+MAX_TU_LINE = 1 << 20
 _ERROR_CHUNK = 1 << 16  # bytes of text looked at a time (a Python object per line in it)
-_SPACES = np.frombuffer(b" \t\n\x0b\x0c", np.uint8)  # what a blank line holds
+_NOT_SPACE = np.ones(256, dtype=bool)  # by byte value: not what a blank line holds
+_NOT_SPACE[np.frombuffer(b" \t\n\x0b\x0c", np.uint8)] = False
 
 
 def _newlines(content: bytes) -> bytes:
@@ -119,14 +124,15 @@ def _chunks(content: bytes):
 
 def _filled_lines(piece: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Indices in ``piece`` of its lines that are not blank, and every line's start and
-    end offsets."""
+    end offsets: a byte of memory per byte of text, and 8 per line (a piece is one line
+    when that line is longer than ``_ERROR_CHUNK``)."""
     data = np.frombuffer(piece, np.uint8)
     ends = np.flatnonzero(data == 10)
     if not len(ends) or ends[-1] != len(data) - 1:
         ends = np.append(ends, len(data))
     starts = np.concatenate([[0], ends[:-1] + 1])
-    line_of = np.searchsorted(ends, np.flatnonzero(~np.isin(data, _SPACES)))
-    return np.unique(line_of), starts, ends
+    filled = np.logical_or.reduceat(_NOT_SPACE[data], starts)
+    return np.flatnonzero(filled), starts, ends
 
 
 def _line_number(content: bytes, row: int) -> int:
@@ -161,12 +167,15 @@ def _bad_line(content: bytes, dtype, width: int | None) -> str:
 def _bad_fields(line: bytes, number: int, dtype, width: int | None):
     """Why a line is not a row of ``width`` values of ``dtype`` (None if it is one),
     and the width."""
-    fields = [f.strip() for f in line.decode("latin-1").split(",")]
-    width = len(fields) if width is None else width
-    if len(fields) != width:
+    count = line.count(b",") + 1  # counted first: a long line is not split into objects
+    if width is None and count > _MAX_WIDTH:
+        return f"line {number} holds {count} comma-separated values", width
+    width = count if width is None else width
+    if count != width:
         return (
-            f"line {number} holds {len(fields)} comma-separated value(s) where {width} are expected"
+            f"line {number} holds {count} comma-separated value(s) where {width} are expected"
         ), width
+    fields = [f.strip() for f in line.decode("latin-1").split(",")]
     kind = "an integer" if dtype is np.int64 else "a number"
     for text in fields:
         if "_" in text:  # Python's int and float read "1_0" as 10; NumPy does not
@@ -192,10 +201,37 @@ def _loaded(content: bytes, dtype) -> np.ndarray | None:
         return None
 
 
+def _long_line(content: bytes) -> int | None:
+    """The byte offset of the first line longer than ``MAX_TU_LINE`` bytes, or None.
+    NumPy's parser takes 13 to 20 bytes per byte of such a line (a 50 MB line of "1,"),
+    and TU lines hold a few numbers: it is refused before parsing. Looked at in pieces
+    of 8 MiB (8 bytes per line end of a piece)."""
+    data = np.frombuffer(content, np.uint8)
+    line_start = 0
+    for start in range(0, len(data), 8 * _CHUNK_OF_LINES):
+        chunk = data[start : start + 8 * _CHUNK_OF_LINES]
+        ends = np.flatnonzero((chunk == 10) | (chunk == 13)) + start
+        if len(ends):
+            lengths = np.diff(ends, prepend=line_start)
+            long = np.flatnonzero(lengths > MAX_TU_LINE)
+            if len(long):
+                return int(ends[long[0]] - lengths[long[0]])
+            line_start = int(ends[-1]) + 1
+        if start + len(chunk) - line_start > MAX_TU_LINE:
+            return line_start
+    return None
+
+
 def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
     """The numbers of a TU file as a 2-d array: a row per non-blank line, ``width``
     columns (any width, the same on every line, when None)."""
     content = _content(path, place)
+    offset = _long_line(content)
+    if offset is not None:
+        raise ValueError(
+            f"{place}: cannot read TU file {path!r}: the line at byte {offset} is longer "
+            f"than {MAX_TU_LINE} bytes (MAX_TU_LINE)"
+        )
     table = _loaded(content, dtype)
     reason = None
     if table is None:
