@@ -328,10 +328,6 @@ def _shape(name, rng, resolution):
     return trimesh.Trimesh(vertices, sphere.faces, process=False)
 
 
-#: Most rings and segments of a :func:`make_shapes` sphere (a million vertices).
-MAX_SHAPE_RESOLUTION = 1000
-
-
 @validate_params(
     {
         "n_per_class": [Interval(Integral, 1, None, closed="left")],
@@ -391,15 +387,10 @@ def make_shapes(
     >>> len(meshes), y.tolist()
     (12, [0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5])
     """
-    low, high = resolution
-    if not (
-        isinstance(low, Integral)
-        and isinstance(high, Integral)
-        and 3 <= low <= high <= MAX_SHAPE_RESOLUTION
-    ):
+    low, high = resolution  # rings and segments of a UV sphere: at most 1000
+    if not (isinstance(low, Integral) and isinstance(high, Integral) and 3 <= low <= high <= 1000):
         raise ValueError(
-            f"resolution must be two ints 3 <= low <= high <= {MAX_SHAPE_RESOLUTION} "
-            f"(MAX_SHAPE_RESOLUTION: rings and segments of a UV sphere), got {resolution!r}"
+            f"resolution must be two ints 3 <= low <= high <= 1000, got {resolution!r}"
         )
     names = tuple(_CLASSES) if classes is None else tuple(classes)
     unknown = [c for c in names if c not in _CLASSES]
