@@ -203,7 +203,7 @@ def _transport_scaled(a, b, order, internal_p, hold):
         raise ValueError("a diagram's persistence overflows float64")
     if span < _SMALLEST_SCALE and not hold:
         return 0.0, 0.0, no_partner, True
-    scale = max(power_of_two_above(max(largest, _SMALLEST_NORMAL)), _SMALLEST_NORMAL)
+    scale = power_of_two_above(max(largest, _SMALLEST_NORMAL))
     if order == 1.0 or order == 2.0:
         # Orders 1 and 2 keep the bits of the unscaled computation (scaling by a power
         # of two is exact) unless the optimum underflows.

@@ -81,7 +81,7 @@ def _content(path: str, place: str) -> bytes:
 
 _BLANK_LINES = re.compile(rb"(?m)^[ \t\f\v]*(?:\n|\Z)")
 _MAX_WIDTH = 1 << 16  # values of one line looked at, on the error path
-_CHUNK_OF_LINES = 1 << 20
+_LINE_SCAN = 8 << 20  # bytes looked at a time for a long line (8 per line end in them)
 #: Longest line of a TU file, in bytes (1 MiB: tens of thousands of attributes).
 MAX_TU_LINE = 1 << 20
 _ERROR_CHUNK = 1 << 16  # bytes of text looked at a time (a Python object per line in it)
@@ -204,12 +204,11 @@ def _loaded(content: bytes, dtype) -> np.ndarray | None:
 def _long_line(content: bytes) -> int | None:
     """The byte offset of the first line longer than ``MAX_TU_LINE`` bytes, or None.
     NumPy's parser takes 13 to 20 bytes per byte of such a line (a 50 MB line of "1,"),
-    and TU lines hold a few numbers: it is refused before parsing. Looked at in pieces
-    of 8 MiB (8 bytes per line end of a piece)."""
+    and TU lines hold a few numbers: it is refused before parsing."""
     data = np.frombuffer(content, np.uint8)
     line_start = 0
-    for start in range(0, len(data), 8 * _CHUNK_OF_LINES):
-        chunk = data[start : start + 8 * _CHUNK_OF_LINES]
+    for start in range(0, len(data), _LINE_SCAN):
+        chunk = data[start : start + _LINE_SCAN]
         ends = np.flatnonzero((chunk == 10) | (chunk == 13)) + start
         if len(ends):
             lengths = np.diff(ends, prepend=line_start)

@@ -17,18 +17,23 @@ __all__ = [
 ]
 
 
-def unit_box(vertices: np.ndarray) -> tuple[np.ndarray, float]:
+def unit_box(vertices: np.ndarray, box: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """``vertices`` moved and scaled into ``[-1, 1]^3``, and the length ``scale`` with
     ``vertices ~ center + scale * unit``, computed without overflow or underflow for
     any finite float64 coordinates (halves first, then one division), so that what
     follows (areas, cotangents, the mass matrix) sees numbers near 1 whatever the
-    mesh's scale. A mesh of one point (no extent) is returned as it is."""
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    half = vertices / 2 - (lo / 2 + hi / 2) / 2
-    extent = float(np.abs(half).max()) if len(vertices) else 0.0
+    mesh's scale. A mesh of one point (no extent) is returned as it is.
+
+    With ``box`` (some of the points), the unit box is that of ``box``: the other
+    vertices may land far outside it, overflowing to infinity beyond float64."""
+    box = vertices if box is None else box
+    lo, hi = box.min(axis=0), box.max(axis=0)
+    center = (lo / 2 + hi / 2) / 2
+    extent = float(np.abs(box / 2 - center).max()) if len(box) else 0.0
     if not 0.0 < extent < np.inf:
         return vertices, 1.0
-    return half / extent, 2.0 * extent
+    with np.errstate(over="ignore"):
+        return (vertices / 2 - center) / extent, 2.0 * extent
 
 
 def unit_box_mass(mass: np.ndarray, scale: float, place: str) -> np.ndarray:

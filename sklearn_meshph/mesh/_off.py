@@ -113,10 +113,19 @@ def _counts(lines: _Lines, size: int) -> tuple[int, int]:
     return n_vertices, n_faces
 
 
-def _check_line_count(data: bytes, lines: _Lines, n_vertices: int, n_faces: int) -> None:
+def _check_lines(data: bytes, lines: _Lines, n_vertices: int, n_faces: int) -> None:
     """Before anything is allocated from the header: the file must have a line per
-    declared vertex and face after the header."""
-    remaining = data.count(b"\n") + 1 - lines.number
+    declared vertex and face after the header, and not more than ``_LINES_PER_ELEMENT``
+    per vertex or face (blank and comment lines are skipped one by one: gigabytes of
+    them would take minutes to tell from a file that is cut short)."""
+    held = data.count(b"\n")
+    if held > _LINES_PER_ELEMENT * (n_vertices + n_faces) + _SPARE_LINES:
+        raise ValueError(
+            f"{lines.where}: it holds {held} lines for the {n_vertices} vertices and "
+            f"{n_faces} faces its header declares: more than {_LINES_PER_ELEMENT} per vertex "
+            "or face (blank or comment lines beyond any use)"
+        )
+    remaining = held + 1 - lines.number
     if remaining < n_vertices + n_faces:
         raise lines.error(
             f"the header declares {n_vertices} vertices and {n_faces} faces, and {remaining} "
@@ -124,44 +133,50 @@ def _check_line_count(data: bytes, lines: _Lines, n_vertices: int, n_faces: int)
         )
 
 
-def _numbers(rows: list[list[bytes]], dtype, where: str, first: int, what: str) -> np.ndarray:
-    """``rows`` of equal length as an array of ``dtype``; a bad value names its row."""
-    for k, row in enumerate(rows):
-        for value in row:
-            if len(value) > MAX_VALUE_LENGTH:
-                raise ValueError(
-                    f"{where}: {what} {first + k} holds a value of {len(value)} characters, "
-                    f"more than {MAX_VALUE_LENGTH} (MAX_VALUE_LENGTH)"
-                )
+def _numbers(values: list[bytes], owner: np.ndarray, dtype, where: str, what: str):
+    """``values`` as an array of ``dtype``; ``owner[k]`` is the vertex or face that value
+    ``k`` belongs to, named (with all its values) when one is too long or not a number."""
+
+    def refuse(k: int, problem: str) -> ValueError:
+        shown = b" ".join(values[i] for i in np.flatnonzero(owner == owner[k]))
+        return ValueError(
+            f"{where}: {what} {owner[k]} holds {problem}: {shown[:80].decode('latin-1')!r}"
+        )
+
+    for k, value in enumerate(values):
+        if len(value) > MAX_VALUE_LENGTH:
+            raise refuse(
+                k,
+                f"a value of {len(value)} characters, more than {MAX_VALUE_LENGTH} "
+                "(MAX_VALUE_LENGTH)",
+            )
     try:
-        return np.array(rows, dtype=bytes).astype(dtype)
+        return np.array(values, dtype=bytes).astype(dtype)
     except (ValueError, OverflowError):
-        for k, row in enumerate(rows):  # name the first bad row (rare path)
+        for k, value in enumerate(values):  # name the first bad value (rare path)
             try:
-                np.array(row, dtype=bytes).astype(dtype)
+                np.array([value], dtype=bytes).astype(dtype)
             except (ValueError, OverflowError):
-                shown = b" ".join(row)[:80].decode("latin-1")
-                raise ValueError(
-                    f"{where}: {what} {first + k} holds a value that is not a number of "
-                    f"that kind: {shown!r}"
-                ) from None
+                raise refuse(k, "a value that is not a number of that kind") from None
         raise
 
 
 def _vertices(lines: _Lines, n_vertices: int) -> np.ndarray:
     vertices = np.empty((n_vertices, 3))
     for start in range(0, n_vertices, _BLOCK):
-        rows = []
-        for k in range(start, min(start + _BLOCK, n_vertices)):
+        values = []
+        stop = min(start + _BLOCK, n_vertices)
+        for k in range(start, stop):
             line = lines.next_line()
             if line is None:
                 raise lines.ended(k, n_vertices, "vertices")
             xyz = line.split(None, 3)[:3]
             if len(xyz) < 3:
                 raise lines.error(f"vertex {k} has {len(xyz)} coordinates, not 3")
-            rows.append(xyz)
-        vertices[start : start + len(rows)] = _numbers(
-            rows, np.float64, lines.where, start, "vertex"
+            values.extend(xyz)
+        owner = np.repeat(np.arange(start, stop), 3)
+        vertices[start:stop] = _numbers(values, owner, np.float64, lines.where, "vertex").reshape(
+            -1, 3
         )
     return vertices
 
@@ -188,7 +203,7 @@ def _fans(values: list[bytes], counts: list[int], first: int, lines: _Lines, n_v
     each face's first corner, in the file's order."""
     counts = np.array(counts, dtype=np.int64)
     face_of = np.repeat(np.arange(first, first + len(counts)), counts)
-    corners = _corner_values(values, face_of, lines)
+    corners = _numbers(values, face_of, np.int64, lines.where, "face")
     bad = (corners < 0) | (corners >= n_vertices)
     if bad.any():
         at = int(np.flatnonzero(bad)[0])
@@ -204,27 +219,6 @@ def _fans(values: list[bytes], counts: list[int], first: int, lines: _Lines, n_v
     step = np.arange(len(owner)) - np.repeat(np.cumsum(n_triangles) - n_triangles, n_triangles)
     apex = starts[owner]
     return np.column_stack([corners[apex], corners[apex + step + 1], corners[apex + step + 2]])
-
-
-def _corner_values(values: list[bytes], face_of: np.ndarray, lines: _Lines) -> np.ndarray:
-    for k, value in enumerate(values):
-        if len(value) > MAX_VALUE_LENGTH:
-            raise ValueError(
-                f"{lines.where}: face {face_of[k]} holds a value of {len(value)} characters, "
-                f"more than {MAX_VALUE_LENGTH} (MAX_VALUE_LENGTH)"
-            )
-    try:
-        return np.array(values, dtype=bytes).astype(np.int64)
-    except (ValueError, OverflowError):
-        for k, value in enumerate(values):  # name the first bad value (rare path)
-            try:
-                np.array([value], dtype=bytes).astype(np.int64)
-            except (ValueError, OverflowError):
-                raise ValueError(
-                    f"{lines.where}: face {face_of[k]} holds a value that is not a number of "
-                    f"that kind: {value[:80].decode('latin-1')!r}"
-                ) from None
-        raise
 
 
 def _faces(lines: _Lines, n_faces: int, n_vertices: int) -> np.ndarray:
@@ -259,14 +253,5 @@ def read_off(data: bytes, where: str) -> tuple[np.ndarray, np.ndarray]:
         data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     lines = _Lines(data, where)
     n_vertices, n_faces = _counts(lines, len(data))
-    held = data.count(b"\n")
-    if held > _LINES_PER_ELEMENT * (n_vertices + n_faces) + _SPARE_LINES:
-        # Blank and comment lines are skipped one by one: gigabytes of them would take
-        # minutes to tell from a file that is cut short.
-        raise ValueError(
-            f"{where}: it holds {held} lines for the {n_vertices} vertices and {n_faces} "
-            f"faces its header declares: more than {_LINES_PER_ELEMENT} per vertex or face "
-            "(blank or comment lines beyond any use)"
-        )
-    _check_line_count(data, lines, n_vertices, n_faces)
+    _check_lines(data, lines, n_vertices, n_faces)
     return _vertices(lines, n_vertices), _faces(lines, n_faces, n_vertices)

@@ -71,13 +71,9 @@ def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float]:
     # cluster of (near-)duplicates, not the shape: its box is not the shape's.
     if outside == 0 or outside > FAR_SHARE * len(points):
         return unit, scale
-    bulk_unit, bulk_scale = unit_box(bulk)
-    extent = float(np.ptp(bulk, axis=0).max())
-    if not (extent > 0.0 and 0.0 < bulk_scale * FAR_BOX_RATIO < scale):
+    moved, bulk_scale = unit_box(points, bulk)
+    if not (float(np.ptp(bulk, axis=0).max()) > 0.0 and bulk_scale * FAR_BOX_RATIO < scale):
         return unit, scale
-    low, high = bulk.min(axis=0), bulk.max(axis=0)
-    with np.errstate(over="ignore"):
-        moved = (points / 2 - (low / 2 + high / 2) / 2) / (bulk_scale / 2)
     return np.clip(moved, -_FAR_CLIP, _FAR_CLIP), bulk_scale
 
 
