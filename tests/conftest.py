@@ -71,6 +71,32 @@ def make_irregular_ellipsoid():
     return irregular_ellipsoid
 
 
+def nest_folders(folder, depth):
+    """``folder`` made, with ``depth`` folders ``d`` nested in it (deeper than a path
+    can name: each made relative to its parent's descriptor), a file in the deepest."""
+    folder.mkdir()
+    parent = os.open(folder, os.O_RDONLY)
+    for _ in range(depth):
+        os.mkdir("d", dir_fd=parent)
+        inner = os.open("d", os.O_RDONLY, dir_fd=parent)
+        os.close(parent)
+        parent = inner
+    os.close(os.open("data.npy", os.O_CREAT | os.O_WRONLY, dir_fd=parent))
+    os.close(parent)
+
+
+def remove_nested(folder):
+    """Remove a tree of :func:`nest_folders` without recursion (pytest's clean-up of
+    its temporary folders recurses, and fails on it): each level is lifted up one."""
+    while (folder / "d" / "d").is_dir():
+        os.rename(folder / "d" / "d", folder / "lifted")
+        os.rmdir(folder / "d")
+        os.rename(folder / "lifted", folder / "d")
+    import shutil
+
+    shutil.rmtree(folder)
+
+
 def assert_identical(actual, expected):
     """Bit-for-bit equality of transformer outputs: arrays, ScalarFields, and lists or
     tuples of them (types, lengths and dtypes included)."""

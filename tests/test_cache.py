@@ -9,7 +9,7 @@ import stat
 
 import numpy as np
 import pytest
-from conftest import irregular_ellipsoid
+from conftest import irregular_ellipsoid, nest_folders, remove_nested
 
 from sklearn_meshph import LaplacianEigenTransformer
 from sklearn_meshph.spectral import cache as cache_module
@@ -361,3 +361,56 @@ def test_concurrent_writers_keep_each_others_entries(tmp_path):
     assert os.stat(entry).st_ino != placed
     np.testing.assert_array_equal(again.values, first.values)
     assert [p.name for p in late.folder.iterdir()] == [key]
+
+
+def _age(path):
+    old = 10 * cache_module._STALE_TEMPORARY
+    os.utime(path, (path.lstat().st_atime - old, path.lstat().st_mtime - old))
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs POSIX, non-root")
+def test_an_unusable_read_only_entry_is_replaced_and_nothing_is_left(tmp_path):
+    """The entry was moved aside and replaced, but the folder moved aside could not be
+    emptied (nor by the sweeper later): its owner had no write permission on it."""
+    first = solve(tmp_path)
+    (entry,) = entries(tmp_path)
+    (entry / "values.npy").write_bytes(b"damaged")
+    entry.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    with pytest.warns(CacheWarning, match="unusable and is recomputed"):
+        again = solve(tmp_path)
+    np.testing.assert_array_equal(again.values, first.values)
+    assert [p.name for p in entry.parent.iterdir()] == [entry.name]
+    assert stat.S_IMODE(entry.stat().st_mode) & stat.S_IWUSR  # ours, written again
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs POSIX")
+def test_hostile_orphans_are_swept_without_recursion_or_following_links(tmp_path):
+    """An orphan nested thousands of folders deep made the sweeper (and so every store)
+    raise RecursionError; one holding a link must not reach what the link points to."""
+    cache = EigenCache(tmp_path)
+    cache.folder.mkdir(parents=True)
+    deep = cache.folder / ".deep.1.a.tmp"
+    nest_folders(deep, 1200)
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "keep.txt").write_text("not the cache's")
+    linked = cache.folder / ".linked.2.b.tmp"
+    linked.mkdir()
+    (linked / "to-outside").symlink_to(outside)
+    (linked / "file").write_text("")
+    read_only = cache.folder / ".ro.3.c.tmp"
+    nest_folders(read_only, 2)
+    (read_only / "d").chmod(stat.S_IRUSR | stat.S_IXUSR)
+    for path in (deep, linked, read_only):
+        _age(path)
+    try:
+        field = solve(tmp_path)  # stores: sweeps
+        assert deep.exists()  # deeper than any entry: left, but no error
+    finally:
+        remove_nested(deep)
+    assert np.isfinite(field.values).all()
+    assert not linked.exists() and not read_only.exists()
+    assert (outside / "keep.txt").read_text() == "not the cache's"
+    cache_module.remove_path(outside / "keep.txt")
+    assert not (outside / "keep.txt").exists()
+    cache_module.remove_path(tmp_path / "nothing here")  # nothing: no error

@@ -8,6 +8,7 @@ import pickle
 import joblib
 import numpy as np
 import pytest
+from conftest import nest_folders, remove_nested
 
 from sklearn_meshph import PerDiagramDistance
 from sklearn_meshph.diagrams import pairwise, per_diagram
@@ -195,3 +196,23 @@ def test_temporary_files_of_killed_writers_are_swept(tmp_path):
     assert [path.suffix for path in entries(tmp_path)] == [".tmp", ".npy"] or len(
         entries(tmp_path)
     ) == 2
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs POSIX")
+def test_an_entry_that_is_a_deep_folder_is_neither_followed_nor_a_recursion(tmp_path, calls):
+    """A folder nested thousands of levels deep in an entry's place raised RecursionError
+    from the removal before the store; it is left (too deep to be ours) and the stack
+    computed, with warnings."""
+    X = samples()
+    expected = PerDiagramDistance().fit_transform(X)
+    stage = PerDiagramDistance(memory=tmp_path)
+    stage.fit_transform(X)
+    (entry,) = entries(tmp_path)
+    entry.unlink()
+    nest_folders(entry, 1200)
+    try:
+        with pytest.warns(CacheWarning, match="is unusable"):
+            assert np.array_equal(stage.fit_transform(X), expected)
+        assert entry.is_dir()
+    finally:
+        remove_nested(entry)

@@ -19,7 +19,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
 import stat
 import uuid
 import warnings
@@ -28,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import VERSION
-from ..spectral.cache import CacheWarning, EigenCache, cache_of, sweep_orphans
+from ..spectral.cache import CacheWarning, EigenCache, cache_of, remove_path, sweep_orphans
 
 __all__ = ["StackCache", "stack_cache_of"]
 
@@ -123,7 +122,7 @@ class StackCache:
             with open(temporary, "xb") as stream:
                 np.save(stream, np.ascontiguousarray(stack), allow_pickle=False)
             if entry.is_dir() and not entry.is_symlink():
-                shutil.rmtree(entry)  # an unusable entry being replaced
+                remove_path(entry)  # an unusable entry being replaced
             os.replace(temporary, entry)
             sweep_orphans(self.folder)
         except OSError as error:

@@ -20,8 +20,10 @@ input mesh's bytes, the solver settings, the package version and
 :data:`NUMERICS_VERSION`, which any change to cleaning, assembly or the eigensolver
 must bump (a test fails when those modules change and it does not), so an upgrade
 never reads stale results. Entries are written in a temporary folder and renamed into
-place; temporary folders left by a killed process are removed by later writers. A
-folder that cannot be written is used read-only, with one warning.
+place; temporary folders left by a killed process are removed by later writers, by
+:func:`remove_path` (links never followed, read-only folders made writable, trees
+deeper than any writer makes left alone). A folder that cannot be written is used
+read-only, with one warning.
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ __all__ = [
     "EigenCache",
     "cache_of",
     "numerics_digest",
+    "remove_path",
     "sweep_orphans",
 ]
 
@@ -154,13 +157,74 @@ def _report(fields) -> CleaningReport:
     return CleaningReport(**values)
 
 
-def _remove(path: Path) -> None:
-    """Remove whatever is at ``path`` (a folder, a file, a link), if anything."""
+#: Folders nested deeper than this are left where they are by :func:`remove_path`
+#: (the caches' own are one level deep): a hostile tree never exhausts the stack.
+_MAX_REMOVAL_DEPTH = 16
+# Removal relative to a folder's descriptor, where the system has it (not Windows).
+_SAFE_REMOVAL = hasattr(os, "O_DIRECTORY") and {
+    os.open,
+    os.stat,
+    os.unlink,
+    os.rmdir,
+    os.chmod,
+}.issubset(os.supports_dir_fd)
+
+
+def remove_path(path) -> None:
+    """Remove whatever is at ``path`` (a file, a link, a FIFO, a folder and what it
+    holds), if anything, never following a link: each folder is opened relative to its
+    parent's descriptor, without following links, and checked to be the one looked at.
+    A folder its owner may not write (an entry copied read-only) is given the owner's
+    permissions first. Folders nested more than 16 levels deep are left."""
+    path = Path(path)
+    if not _SAFE_REMOVAL:  # no descriptor-relative calls on this system
+        try:
+            if stat.S_ISDIR(os.lstat(path).st_mode):
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                os.unlink(path)
+        except (OSError, RecursionError):
+            pass
+        return
     try:
-        if stat.S_ISDIR(os.lstat(path).st_mode):
-            shutil.rmtree(path, ignore_errors=True)
-        else:
-            os.unlink(path)
+        parent = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return
+    try:
+        _remove_at(parent, path.name, 0)
+    finally:
+        os.close(parent)
+
+
+def _remove_at(folder: int, name: str, depth: int) -> None:
+    try:
+        info = os.stat(name, dir_fd=folder, follow_symlinks=False)
+        if not stat.S_ISDIR(info.st_mode):
+            os.unlink(name, dir_fd=folder)
+            return
+        if depth >= _MAX_REMOVAL_DEPTH:
+            return
+        mode = stat.S_IMODE(info.st_mode)
+        if mode & stat.S_IRWXU != stat.S_IRWXU:
+            # Follows a link swapped in since the stat: that grants, never removes.
+            os.chmod(name, mode | stat.S_IRWXU, dir_fd=folder)
+        inner = os.open(name, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=folder)
+    except OSError:
+        return
+    try:
+        found = os.fstat(inner)
+        if (found.st_dev, found.st_ino) != (info.st_dev, info.st_ino):
+            return  # swapped since the stat
+        with os.scandir(inner) as listing:
+            names = [item.name for item in listing]
+        for child in names:
+            _remove_at(inner, child, depth + 1)
+    except OSError:
+        return
+    finally:
+        os.close(inner)
+    try:
+        os.rmdir(name, dir_fd=folder)
     except OSError:
         pass
 
@@ -216,13 +280,8 @@ def sweep_orphans(folder: Path) -> None:
     now = time.time()
     for path in folder.glob(".*.tmp"):
         try:
-            mode = path.lstat()
-            if now - mode.st_mtime <= _STALE_TEMPORARY:
-                continue
-            if stat.S_ISDIR(mode.st_mode):
-                shutil.rmtree(path, ignore_errors=True)
-            else:
-                path.unlink()
+            if now - path.lstat().st_mtime > _STALE_TEMPORARY:
+                remove_path(path)
         except OSError:
             pass
 
@@ -374,8 +433,8 @@ class EigenCache:
                 self._unusable.discard(key)
             except OSError:  # another writer placed theirs meanwhile
                 pass
-            _remove(aside)
-        shutil.rmtree(temporary, ignore_errors=True)
+            remove_path(aside)
+        remove_path(temporary)
 
     def store(self, key: str, result) -> None:
         """Write an entry atomically; warn once and go on if the folder is read-only."""
@@ -421,7 +480,7 @@ class EigenCache:
             (temporary / "header.json").write_text(json.dumps(header))
             self._place(temporary, key)
         except OSError as error:
-            shutil.rmtree(temporary, ignore_errors=True)
+            remove_path(temporary)
             self._read_only = True
             warnings.warn(
                 f"the eigen cache {self.folder} cannot be written ({error}); computing "
