@@ -84,9 +84,27 @@ def _pickle(path):
     np.save(path, np.array([Hostile(), 1.0], dtype=object), allow_pickle=True)
 
 
-def _truncated(path):
+def _truncated(path):  # cut in the data, before the digest that ends the file
     data = path.read_bytes()
-    path.write_bytes(data[: len(data) - 8])
+    path.write_bytes(data[: len(data) - 40])
+
+
+def _flipped(path):  # one bit of the data: well-formed, finite, positive
+    data = bytearray(path.read_bytes())
+    data[-40] ^= 1
+    path.write_bytes(bytes(data))
+
+
+def _without_digest(path):  # the same stack, as the format before the digests
+    np.save(path, np.load(path, allow_pickle=False))
+
+
+def _other_entry(path):  # another stack of the same shape, digest and all
+    location = path.parent.parent
+    other = PerDiagramDistance(memory=location)
+    other.fit_transform(samples(seed=9))
+    (newer,) = [p for p in entries(location) if p != path]
+    os.replace(newer, path)
 
 
 def _wrong_shape(path):
@@ -115,7 +133,19 @@ def _link(path):
 
 
 @pytest.mark.parametrize(
-    "tamper", [_pickle, _truncated, _wrong_shape, _negative, _fifo, _folder, _link]
+    "tamper",
+    [
+        _pickle,
+        _truncated,
+        _flipped,
+        _without_digest,
+        _other_entry,
+        _wrong_shape,
+        _negative,
+        _fifo,
+        _folder,
+        _link,
+    ],
 )
 def test_a_tampered_entry_is_recomputed_with_a_warning(tmp_path, calls, tamper):
     if tamper is _fifo and not hasattr(os, "mkfifo"):

@@ -5,8 +5,9 @@ Each stack is one ``.npy`` file, ``<location>/sklearn_meshph_distances/<key>.npy
 whose key hashes the format, the package version, the distance parameters and the
 bytes of the diagrams of both sides. Nothing is unpickled: the ``.npy`` header's dtype
 and shape are checked against the stack asked for before a byte of data is read, then
-the data is loaded with ``allow_pickle=False`` and checked for NaN and negative
-distances. Anything but a regular file in place of an entry (a FIFO, a folder, a
+the data is read and checked against the SHA-256 of the key and the data that follows
+it in the file (another entry's file under this key, a bit flipped on disk), and for
+NaN and negative distances. Anything but a regular file in place of an entry (a FIFO, a folder, a
 symbolic link) is never opened; an unusable entry is recomputed and replaced, with a
 :class:`~sklearn_meshph.spectral.cache.CacheWarning`. Entries are written to a
 temporary file in the same folder and renamed into place (temporary files that a
@@ -31,7 +32,7 @@ from ..spectral.cache import CacheWarning, EigenCache, cache_of, remove_path, sw
 
 __all__ = ["StackCache", "stack_cache_of"]
 
-_FORMAT = "sklearn-meshph distance stack 1"
+_FORMAT = "sklearn-meshph distance stack 2"
 _FOLDER = "sklearn_meshph_distances"
 
 # Opening never blocks (a FIFO swapped in after the check) nor follows a link.
@@ -41,6 +42,7 @@ _OPEN_FLAGS = (
     | getattr(os, "O_NOFOLLOW", 0)
     | getattr(os, "O_BINARY", 0)
 )
+_DIGEST_SIZE = hashlib.sha256().digest_size
 _HEADERS = {
     (1, 0): np.lib.format.read_array_header_1_0,
     (2, 0): np.lib.format.read_array_header_2_0,
@@ -109,7 +111,7 @@ class StackCache:
         try:
             if not stat.S_ISREG(mode):
                 raise ValueError("not a regular file")
-            return _read(entry, tuple(shape), np.dtype(dtype))
+            return _read(entry, key, tuple(shape), np.dtype(dtype))
         except (OSError, ValueError, SyntaxError, OverflowError) as error:
             return _unusable(entry, error)
 
@@ -119,8 +121,10 @@ class StackCache:
         temporary = self.folder / f".{key}.{os.getpid()}.{uuid.uuid4().hex}.tmp"
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
+            stack = np.ascontiguousarray(stack)
             with open(temporary, "xb") as stream:
-                np.save(stream, np.ascontiguousarray(stack), allow_pickle=False)
+                np.save(stream, stack, allow_pickle=False)
+                stream.write(_digest(key, stack))
             if entry.is_dir() and not entry.is_symlink():
                 remove_path(entry)  # an unusable entry being replaced
             os.replace(temporary, entry)
@@ -143,9 +147,18 @@ def _unusable(entry: Path, error) -> None:
     )
 
 
-def _read(entry: Path, shape: tuple, dtype: np.dtype) -> np.ndarray:
+def _digest(key: str, stack: np.ndarray) -> bytes:
+    """The SHA-256 of the key and the stack's data: what an entry ends with (another
+    entry's file renamed to this key, a bit flipped on disk, do not match)."""
+    digest = hashlib.sha256(key.encode())
+    digest.update(memoryview(np.ascontiguousarray(stack)).cast("B"))
+    return digest.digest()
+
+
+def _read(entry: Path, key: str, shape: tuple, dtype: np.dtype) -> np.ndarray:
     """The stack of a regular ``.npy`` file of this ``shape`` and ``dtype``, the header
-    checked before the data is read."""
+    checked before the data is read, the data read in place and checked against the
+    digest that follows it."""
     descriptor = os.open(entry, _OPEN_FLAGS)
     with os.fdopen(descriptor, "rb") as stream:
         if not stat.S_ISREG(os.fstat(descriptor).st_mode):  # swapped since the lstat
@@ -156,8 +169,12 @@ def _read(entry: Path, shape: tuple, dtype: np.dtype) -> np.ndarray:
         found_shape, fortran, found = _HEADERS[version](stream)
         if found != dtype or fortran or found_shape != shape:
             raise ValueError(f"dtype {found}, shape {found_shape}, not {dtype}, {shape}")
-        stream.seek(0)
-        stack = np.load(stream, allow_pickle=False)
+        stack = np.empty(shape, dtype)
+        if stream.readinto(memoryview(stack).cast("B")) != stack.nbytes:
+            raise ValueError("the file is cut short")
+        trailer = stream.read(_DIGEST_SIZE + 1)
+    if trailer != _digest(key, stack):
+        raise ValueError("its data is not what was stored (checksum)")
     if not (stack >= 0).all():
         raise ValueError("NaN or negative distances")
     return stack
