@@ -3,8 +3,11 @@ always valid JSON) and the pictures, each labelled by what it shows."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
+import os
+import tempfile
 import textwrap
 from pathlib import Path
 
@@ -149,11 +152,23 @@ def write_data(output: Path, matrix, diagrams, predictions, names, filenames, su
         writer.writerow(["index", "file", "true label", "predicted label", "fold"])
         for i in range(len(y)):
             writer.writerow([i, filenames[i], names[y[i]], names[predicted[i]], int(fold_of[i])])
-    summary = json_safe(dict(summary, files=[p.name for p in paths]))
-    with open(output / "summary.json", "w", encoding="utf-8") as f:
-        json.dump(summary, f, indent=2, allow_nan=False)
-        f.write("\n")
+    write_summary(output, dict(summary, files=[p.name for p in paths]))
     return paths
+
+
+def write_summary(output: Path, summary: dict) -> None:
+    """``summary.json``, replaced whole or not at all: written to a new temporary file
+    of the folder, then renamed over the old one (a full disk leaves the old one)."""
+    text = json.dumps(json_safe(summary), indent=2, allow_nan=False) + "\n"
+    descriptor, temporary = tempfile.mkstemp(prefix=".summary.", suffix=".tmp", dir=output)
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(temporary, output / "summary.json")
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+        raise
 
 
 def write_pictures(output: Path, matrix, y, names, fields, random_state, diagrams=None):

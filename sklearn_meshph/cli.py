@@ -56,7 +56,14 @@ from ._cli_messages import (
     one_line,
     sample_indices,
 )
-from ._report import format_confusion, json_safe, wrap, write_data, write_pictures
+from ._report import (
+    format_confusion,
+    json_safe,
+    wrap,
+    write_data,
+    write_pictures,
+    write_summary,
+)
 from ._version import VERSION
 from .combine import CombinedDistance
 from .datasets import SHAPE_CLASSES, SkippedFilesWarning, load_mesh_folder, make_shapes
@@ -438,18 +445,6 @@ def _run(args) -> int:
     print(format_confusion(y, predicted, class_names))
 
     diagrams = _diagrams(tables, len(y), fields[0].n_functions)
-    if not args.no_plots:
-        t = time.perf_counter()
-        try:
-            pictures = write_pictures(
-                args.output, matrix, y, class_names, fields, args.random_state, diagrams
-            )
-        except ImportError as exc:
-            print(f"\npictures skipped: {exc}")
-        else:
-            print(f"\npictures in {args.output}: " + ", ".join(p.name for p in pictures))
-        timings["pictures"] = time.perf_counter() - t
-
     summary = {
         "version": VERSION,
         "source": source,
@@ -470,9 +465,24 @@ def _run(args) -> int:
     }
     predictions = (y, predicted, fold_of)
     labels = (class_names, filenames)
+    # The data first: a disk that fills at the pictures keeps the results.
     written = write_data(args.output, matrix, diagrams, predictions, *labels, summary)
+    print(f"\nresults in {args.output}: " + ", ".join(p.name for p in written))
+    if not args.no_plots:
+        t = time.perf_counter()
+        try:
+            pictures = write_pictures(
+                args.output, matrix, y, class_names, fields, args.random_state, diagrams
+            )
+        except ImportError as exc:
+            print(f"pictures skipped: {exc}")
+        else:
+            print(f"pictures in {args.output}: " + ", ".join(p.name for p in pictures))
+        timings["pictures"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - start
-    print(f"results in {args.output}: " + ", ".join(p.name for p in written))
+    if not args.no_plots:  # the summary's timings, the pictures' included
+        summary["timings"] = dict(timings)
+        write_summary(args.output, dict(summary, files=[p.name for p in written]))
     print("\ntime per stage (s)")
     for name, seconds in timings.items():
         print(f"  {name:<18}{seconds:8.2f}")

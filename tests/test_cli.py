@@ -266,7 +266,7 @@ def test_many_classes_wrapped_confusion_and_pictures(tmp_path, capsys):
     assert main(argv) == 0
     stdout = capsys.readouterr().out
     assert "42 meshes, 21 classes" in stdout
-    confusion = stdout.split("confusion matrix")[1].split("\npictures")[0]
+    confusion = stdout.split("confusion matrix")[1].split("\nresults in")[0]
     assert "most often mistaken for" in confusion
     assert max(len(line) for line in confusion.splitlines()) <= 100
     assert (out / "tsne.png").stat().st_size > 0
@@ -656,3 +656,24 @@ def test_ctrl_c_ends_with_one_line(monkeypatch, capfd):
     monkeypatch.setattr(cli, "_run", interrupted)
     assert main(["--no-plots"]) == 130
     assert capfd.readouterr().err == "interrupted\n"
+
+
+def test_a_disk_that_fills_at_the_pictures_keeps_the_data_files(tmp_path, monkeypatch, capfd):
+    """The pictures were written first: a full disk there lost every data file."""
+    import errno
+
+    from sklearn_meshph import cli
+
+    def full(output, *args):
+        raise OSError(errno.ENOSPC, "No space left on device", str(output / "tsne.png"))
+
+    monkeypatch.setattr(cli, "write_pictures", full)
+    output = tmp_path / "out"
+    argv = ["--n-per-class", "2", "--folds", "2", "--output", str(output), "--verbose", "0"]
+    assert main(argv) == 1
+    err = capfd.readouterr().err
+    assert err.startswith("error: No space left on device:") and "tsne.png" in err
+    summary = json.loads((output / "summary.json").read_text())
+    assert np.isfinite(summary["accuracy"]["mean"]) and "pictures" not in summary["timings"]
+    assert np.load(output / "distances.npy").shape == (summary["n_samples"],) * 2
+    assert sorted(p.name for p in output.iterdir()) == sorted(summary["files"])
