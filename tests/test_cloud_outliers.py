@@ -164,3 +164,27 @@ def test_a_cluster_of_duplicates_is_not_taken_for_the_shape(spread):
         warnings.simplefilter("ignore", MeshCleaningWarning)
         field = fields([np.vstack([sphere_points(), copies])])[0]
     np.testing.assert_allclose(field.eigenvalues, clean.eigenvalues, rtol=1e-9)
+
+
+def test_stray_points_are_reported_as_their_share_of_the_area_not_all_of_it():
+    """Ten stray points around a sphere were reported as "99.8% of the area": the area of
+    the operator of the scattered points, which spans more than the sphere. Dropped
+    points now count at most their number's worth of the kept area per point, so stray
+    points are as much of the area as of the points; a far surface sampled like the
+    kept one still counts its own area."""
+    rng = np.random.default_rng(0)
+    sphere = sphere_points()
+    around = sphere_points(30, seed=1) * rng.uniform(3, 6, size=(30, 1))
+    for stray in (rng.uniform(-50, 50, size=(10, 3)), around):
+        with pytest.warns(MeshCleaningWarning, match="far points"):
+            (field,) = fields([np.vstack([sphere, stray])])
+        report = field.cleaning
+        assert report.n_far_points == len(stray)
+        share = len(stray) / (len(sphere) + len(stray))
+        assert report.area_share == pytest.approx(share, rel=1e-6)
+        assert report.vertex_share == pytest.approx(share, rel=1e-12)
+    # Another sphere, a third as large and sampled as densely: its own area, 1/10.
+    small = sphere_points()[::9] / 3 + [40.0, 0.0, 0.0]
+    with pytest.warns(MeshCleaningWarning, match="1 other components"):
+        (field,) = fields([np.vstack([sphere, small])])
+    assert field.cleaning.area_share == pytest.approx(1 / 10, rel=0.05)

@@ -64,7 +64,10 @@ class CleaningReport:
     vertex_share : float
         Share of the vertices (after welding) dropped, unreferenced ones included.
     area_share : float
-        Share of the surface area dropped (degenerate and repeated faces add none).
+        Share of the surface area dropped (degenerate and repeated faces add none). For
+        a point cloud, the area of its operator's mass; a dropped far component counts
+        its own area at most its points' worth of the kept points' area per point, an
+        outlier one point's worth (a few stray points span more area than the shape).
     n_far_points : int
         Points of a point cloud dropped for lying far from the rest for the cloud's own
         sampling (stray points, small far clusters; counted among the other components).

@@ -120,7 +120,7 @@ def _far_components(points, laplacian, components, place):
     knn = nearest(points, LOCAL_NEIGHBORS)
     n_components, labels = neighbourhood_components(points, knn)
     build = CLOUD_LAPLACIANS[laplacian].value
-    kept, operator, n_other, share = np.ones(len(points), dtype=bool), None, 0, 0.0
+    kept, operator, n_other = np.ones(len(points), dtype=bool), None, 0
     if n_components > 1:
         if components == "error":
             raise ValueError(
@@ -140,8 +140,10 @@ def _far_components(points, laplacian, components, place):
                 f"{place}: the point cloud falls apart into {n_components} groups of fewer "
                 f"than {MIN_POINTS} points far from each other"
             )
-        kept, n_other, share = _largest(labels, area, np.bincount(labels))
-        operator = operators[int(labels[np.argmax(kept)])]
+        size = np.bincount(labels)
+        kept, n_other, _ = _largest(labels, area, size)
+        largest = int(labels[np.argmax(kept)])
+        operator = operators[largest]
     knn = knn if kept.all() else nearest_within(points, knn, kept, LOCAL_NEIGHBORS)
     alone = sparse_outliers(points[kept], knn)  # a mask over the kept points
     outliers = np.flatnonzero(kept)[alone]
@@ -157,7 +159,19 @@ def _far_components(points, laplacian, components, place):
         operator, n_other = None, n_other + len(outliers)
     if operator is None:
         operator = build(points[kept], knn=knn)
-    return kept, *operator, n_other, share
+    # The dropped points' area at the kept surface's sampling: a far component's own
+    # area at most its points' worth of the kept area per point (a scatter of stray
+    # points spans more area than the whole shape: it is not that much surface), one
+    # too small for an operator and an outlier their points' worth.
+    kept_area = float(operator[1].diagonal().sum())
+    per_point = kept_area / np.count_nonzero(kept)
+    dropped = per_point * len(outliers)
+    if n_components > 1:
+        worth = size * per_point
+        own = np.where(size >= MIN_POINTS, np.minimum(area, worth), worth)
+        dropped += float(own[np.arange(n_components) != largest].sum())
+    share = dropped / (kept_area + dropped) if kept_area + dropped > 0 else 0.0
+    return kept, *operator, n_other, float(share)
 
 
 def _edges(triangles: np.ndarray, renumber: np.ndarray) -> np.ndarray:
