@@ -7,8 +7,8 @@ import contextlib
 import csv
 import json
 import os
-import tempfile
 import textwrap
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -158,9 +158,12 @@ def write_data(output: Path, matrix, diagrams, predictions, names, filenames, su
 
 def write_summary(output: Path, summary: dict) -> None:
     """``summary.json``, replaced whole or not at all: written to a new temporary file
-    of the folder, then renamed over the old one (a full disk leaves the old one)."""
+    of the folder (the permissions of the umask, as the other result files), then
+    renamed over the old one (a full disk leaves the old one)."""
     text = json.dumps(json_safe(summary), indent=2, allow_nan=False) + "\n"
-    descriptor, temporary = tempfile.mkstemp(prefix=".summary.", suffix=".tmp", dir=output)
+    temporary = output / f".summary.{os.getpid()}.{uuid.uuid4().hex}.tmp"
+    # Created new (never through a link or over a file), with the umask's permissions.
+    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
         with os.fdopen(descriptor, "w", encoding="utf-8") as f:
             f.write(text)

@@ -677,3 +677,7 @@ def test_a_disk_that_fills_at_the_pictures_keeps_the_data_files(tmp_path, monkey
     assert np.isfinite(summary["accuracy"]["mean"]) and "pictures" not in summary["timings"]
     assert np.load(output / "distances.npy").shape == (summary["n_samples"],) * 2
     assert sorted(p.name for p in output.iterdir()) == sorted(summary["files"])
+    # Rewritten through a temporary file, with the umask's permissions as the others
+    # (mkstemp's were 0600: other users could not read it).
+    modes = {os.stat(output / name).st_mode & 0o777 for name in summary["files"]}
+    assert len(modes) == 1, modes

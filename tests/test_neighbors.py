@@ -370,3 +370,24 @@ def test_cheap_parts_are_computed_first_and_prune_the_costly_one(monkeypatch):
     assert computed["big"] < computed["small"] / 2
     # exact_fraction counts the candidates whose every part was computed.
     assert np.sum(index.exact_fraction(queries)) * len(train) == computed["big"]
+
+
+def test_a_failed_refit_leaves_the_last_fit_whole():
+    """The labels, or the scales and parts, were replaced before the failing step: the
+    classifier then indexed the old rows with new labels (IndexError), the index read
+    new parts beside old rows (AttributeError)."""
+    X = [np.array([[0.0, t]]) for t in (1, 1.2, 4, 4.5)]
+    query = [np.array([[0.0, 4.2]])]
+    model = ShapeNeighborsClassifier(DiagramDistance()).fit(X, list("aabb"))
+    bad = [np.array([[0.0, 1.0]]), np.array([[0.0, np.nan]])]
+    with pytest.raises(ValueError):
+        model.fit(bad, ["x", "y"])
+    assert model.predict(query).tolist() == ["b"] and model.classes_.tolist() == ["a", "b"]
+    index = ShapeNeighbors(DiagramDistance(), n_neighbors=2, scale_samples=2).fit(X)
+    expected = index.kneighbors(query)
+    more = [np.array([[0.0, t]]) for t in (1, 2, 3, 4, 5)] + [np.array([[0.0, np.nan]])]
+    with pytest.raises(ValueError):
+        index.fit(more)  # the scales are learned on 2 samples, the NaN is met later
+    assert index.n_samples_fit_ == 4
+    for got, want in zip(index.kneighbors(query), expected, strict=True):
+        np.testing.assert_array_equal(got, want)

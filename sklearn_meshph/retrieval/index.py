@@ -112,7 +112,19 @@ class _ShapeIndex(BaseEstimator):
         self.block_size = block_size
         self.random_state = random_state
 
-    def _fit_index(self, X):
+    def _fit_index(self, X, **state):
+        """Index ``X``, with ``state`` (attributes set with the index): all of it, or, if
+        any step fails, nothing (a failed refit leaves the last fit whole)."""
+        before = dict(self.__dict__)
+        try:
+            self.__dict__.update(state)
+            return self._index(X)
+        except BaseException:
+            self.__dict__.clear()
+            self.__dict__.update(before)
+            raise
+
+    def _index(self, X):
         check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
         distance = make_mesh_distance() if self.distance is None else clone(self.distance)
         head, metric = _split(distance)
@@ -127,7 +139,7 @@ class _ShapeIndex(BaseEstimator):
         metric.fit(fields)
         known = dict(zip(chosen.tolist(), fields, strict=True))
         self.distance_, self.scale_indices_, self.n_samples_fit_ = distance, chosen, n
-        self._parts = [
+        self._parts_ = [
             (name, factor, stateless, IndexedPart(final, 1.0 if factor is None else factor))
             for name, factor, stateless, final in _fitted_parts(metric)
         ]
@@ -141,19 +153,19 @@ class _ShapeIndex(BaseEstimator):
             return [known[i] if i in known else fresh[i] for i in range(start, stop)]
 
         self.rows_ = self._part_rows(fields_of, n)
-        self._vectors = [
-            part.fit(self.rows_[name]).embed(self.rows_[name]) for name, _, _, part in self._parts
+        self._vectors_ = [
+            part.fit(self.rows_[name]).embed(self.rows_[name]) for name, _, _, part in self._parts_
         ]
         return self
 
     def _part_rows(self, fields_of, n):
         """Each part's validated rows of ``n`` samples, by part name, block by block
         (``fields_of(start, stop)``: the head's output for the samples of a block)."""
-        rows = {name: [] for name, *_ in self._parts}
+        rows = {name: [] for name, *_ in self._parts_}
 
         def through(start, stop):
             block = fields_of(start, stop)
-            for name, _, stateless, part in self._parts:
+            for name, _, stateless, part in self._parts_:
                 out = block if stateless is None else stateless.transform(block)
                 rows[name].extend(part.validate(out))
 
@@ -161,7 +173,7 @@ class _ShapeIndex(BaseEstimator):
             _in_block(through, start, stop)
         return {
             name: rows[name] if part.diagrams else np.asarray(rows[name], float).reshape(n, -1)
-            for name, _, _, part in self._parts
+            for name, _, _, part in self._parts_
         }
 
     def _represent(self, X):
@@ -184,14 +196,14 @@ class _ShapeIndex(BaseEstimator):
     def _exact(self, query, cols):
         """The exact ``(n_queries, len(cols))`` distances of query rows to the fitted
         samples ``cols``, the parts combined as the fitted metric combines them."""
-        return _total(self._term(part, query, cols) for part in self._parts)
+        return _total(self._term(part, query, cols) for part in self._parts_)
 
     def _lower(self, query):
         """Lower bounds of each part's term of the combined distance of query rows to
         every fitted sample: one ``(n_queries, n_fitted)`` array per part."""
         return [
             part.lower(part.embed(query[name]), fitted)
-            for (name, _, _, part), fitted in zip(self._parts, self._vectors, strict=True)
+            for (name, _, _, part), fitted in zip(self._parts_, self._vectors_, strict=True)
         ]
 
     def _stages(self, query):
@@ -202,7 +214,7 @@ class _ShapeIndex(BaseEstimator):
             name, _, _, indexed = part
             return sum(len(d) for d in query[name][0]) if indexed.diagrams else 0
 
-        return sorted(range(len(self._parts)), key=lambda j: points(self._parts[j]))
+        return sorted(range(len(self._parts_)), key=lambda j: points(self._parts_[j]))
 
     def _batch(self, query, terms, cols, kth):
         """The exact distances of a query to the candidates ``cols`` that can still be
@@ -216,7 +228,7 @@ class _ShapeIndex(BaseEstimator):
                 alive &= _total(terms) * (1.0 - SLACK) <= kth
             if not alive.any():
                 return np.empty(0), cols[alive]
-            terms[j][alive] = self._term(self._parts[j], query, cols[alive])[0]
+            terms[j][alive] = self._term(self._parts_[j], query, cols[alive])[0]
         return _total(term[alive] for term in terms), cols[alive]
 
     def _select(self, query, lower, k, exclude):
@@ -501,8 +513,8 @@ class ShapeNeighborsClassifier(ClassifierScoreMixin, _ShapeIndex):
             raise ValueError(
                 f"y must hold one label per sample of X ({len(samples)}), got shape {y.shape}"
             )
-        self.classes_, self._codes = np.unique(y, return_inverse=True)
-        return self._fit_index(samples)
+        classes, codes = np.unique(y, return_inverse=True)
+        return self._fit_index(samples, classes_=classes, _codes_=codes)
 
     def predict_proba(self, X):
         """The share of each class among the neighbours of each sample.
@@ -516,7 +528,7 @@ class ShapeNeighborsClassifier(ClassifierScoreMixin, _ShapeIndex):
         ndarray of shape (n_samples, n_classes)
         """
         indices = self.kneighbors(X, return_distance=False)
-        votes = self._codes[indices]
+        votes = self._codes_[indices]
         counts = np.stack([np.sum(votes == c, axis=1) for c in range(len(self.classes_))], 1)
         return counts / indices.shape[1]
 
