@@ -351,7 +351,7 @@ def test_cheap_parts_are_computed_first_and_prune_the_costly_one(monkeypatch):
     queries = [sample(shift) for shift in (0.0, 5.0, 10.0)]
     metric = CombinedDistance([("small", _part("small")), ("big", _part("big"))])
     index = ShapeNeighbors(metric, n_neighbors=2, scale_samples=None).fit(train)
-    names = {id(part): name for name, _, _, part in index._parts}
+    names = {id(part): name for name, _, _, part in index._parts_}
     computed = {"small": 0, "big": 0}
     exact = IndexedPart.exact
 
