@@ -26,6 +26,8 @@ def _n_samples(X) -> int:
     shape = getattr(X, "shape", None)
     if shape is not None and len(shape) > 0:
         return int(shape[0])
+    if shape is not None:
+        raise TypeError("SizeSwitchClassifier takes samples along a first axis, got a 0-d array")
     if hasattr(X, "__len__"):
         return len(X)
     if hasattr(X, "__array__"):
@@ -145,10 +147,14 @@ class SizeSwitchClassifier(ClassifierScoreMixin, BaseEstimator):
         check_params(self._parameter_constraints, self.get_params(deep=False), type(self).__name__)
         chosen = "small" if _n_samples(X) <= self.max_small_samples else "large"
         template = self.small if chosen == "small" else self.large
+        fitted = clone(template).fit(X, y, **fit_params)
+        if not hasattr(fitted, "classes_"):
+            raise TypeError(
+                f"SizeSwitchClassifier's {chosen!r} estimator ({type(template).__name__}) "
+                "is not a classifier: it has no classes_ once fitted"
+            )
         # Set together once the fit succeeded: a failed refit leaves the last fit whole.
-        self.estimator_ = clone(template).fit(X, y, **fit_params)
-        self.chosen_ = chosen
-        self.classes_ = self.estimator_.classes_
+        self.estimator_, self.chosen_, self.classes_ = fitted, chosen, fitted.classes_
         return self
 
     @property

@@ -211,6 +211,8 @@ def test_batches_of_sparse_and_frame_inputs_and_bad_samples():
         model.fit((row for row in X), y)
     with pytest.raises(TypeError, match="got float"):
         model.predict(3.0)
+    with pytest.raises(TypeError, match="got a 0-d array"):
+        model.fit(np.array(1.0), y)
 
 
 def test_a_failed_refit_leaves_the_last_fit_whole():
@@ -219,6 +221,14 @@ def test_a_failed_refit_leaves_the_last_fit_whole():
     with pytest.raises(ValueError):
         model.set_params(max_small_samples=0).fit(X, y[:5])  # the tree refuses
     assert model.chosen_ == "small" and isinstance(model.estimator_, KNeighborsClassifier)
+    # A regressor fits, then has no classes: it was kept (its values predicted as
+    # labels) and a raw AttributeError raised.
+    from sklearn.linear_model import LinearRegression
+
+    model.set_params(max_small_samples=0, large=LinearRegression())
+    with pytest.raises(TypeError, match="'large' estimator \\(LinearRegression\\) is not a"):
+        model.fit(X, y)
+    assert model.chosen_ == "small" and set(model.predict(X)) <= set(y)
 
 
 def test_graph_classifier_default_same_under_any_backend():
