@@ -10,6 +10,7 @@ from numbers import Integral
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.ensemble import ExtraTreesClassifier
+from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import ClassifierScoreMixin
@@ -144,8 +145,8 @@ class LeafSizeForest(ClassifierScoreMixin, BaseEstimator):
         check_params(self._parameter_constraints, self.get_params(), type(self).__name__)
         X, y = validate_data(self, X, y)
         seed = self.random_state
-        if isinstance(seed, np.random.RandomState):
-            seed = seed.randint(2**31)  # the same draws for every candidate
+        if not isinstance(seed, Integral):  # None or a RandomState: one seed drawn, so
+            seed = check_random_state(seed).randint(2**31)  # every candidate draws alike
         forests, scores = [], []
         for leaf in self.min_samples_leaf:
             forest = self._forest(leaf, seed, bootstrap=True)
@@ -202,7 +203,8 @@ class LeafSizeForest(ClassifierScoreMixin, BaseEstimator):
         -------
         ndarray of shape (n_samples,)
         """
-        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+        proba = self.predict_proba(X)  # checks that the forest is fitted first
+        return self.classes_[np.argmax(proba, axis=1)]
 
     @property
     def feature_importances_(self):

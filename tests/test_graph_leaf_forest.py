@@ -119,3 +119,24 @@ def test_refuses_features_other_than_the_fitted_ones():
     forest = LeafSizeForest(n_estimators=5, random_state=0).fit(X, y)
     with pytest.raises(ValueError, match="features"):
         forest.predict(X[:, :3])
+
+
+@pytest.mark.parametrize("state", [None, np.random.RandomState(3), 7])
+def test_every_candidate_draws_alike_and_an_unfitted_forest_says_so(state, monkeypatch):
+    """With ``random_state=None`` each candidate forest drew its own bootstrap samples,
+    against the documentation; ``predict`` before ``fit`` was an AttributeError."""
+    from sklearn.exceptions import NotFittedError
+
+    X, y = noisy()
+    with pytest.raises(NotFittedError):
+        LeafSizeForest().predict(X)
+    seeds = []
+    grow = LeafSizeForest._forest
+
+    def recording(self, leaf, seed, *, bootstrap):
+        seeds.append(seed)
+        return grow(self, leaf, seed, bootstrap=bootstrap)
+
+    monkeypatch.setattr(LeafSizeForest, "_forest", recording)
+    LeafSizeForest(n_estimators=5, min_samples_leaf=(1, 5), random_state=state).fit(X, y)
+    assert len(seeds) == 3 and len(set(seeds)) == 1 and isinstance(seeds[0], int)  # + the kept
