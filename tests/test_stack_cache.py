@@ -246,3 +246,17 @@ def test_an_entry_that_is_a_deep_folder_is_neither_followed_nor_a_recursion(tmp_
         assert entry.is_dir()
     finally:
         remove_nested(entry)
+
+
+@pytest.mark.parametrize("kind", ["file", "fifo"])
+def test_a_cache_folder_that_is_not_a_folder_degrades_to_computing(tmp_path, kind):
+    """``<memory>/sklearn_meshph_distances`` a file or a FIFO: the clean-up of the
+    temporary file raised NotADirectoryError out of the store."""
+    if kind == "fifo" and not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    folder = tmp_path / "sklearn_meshph_distances"
+    folder.write_bytes(b"") if kind == "file" else os.mkfifo(folder)
+    X = samples()
+    with pytest.warns(CacheWarning, match="cannot be written"):
+        result = PerDiagramDistance(memory=tmp_path).fit_transform(X)
+    assert np.array_equal(result, PerDiagramDistance().fit_transform(X))

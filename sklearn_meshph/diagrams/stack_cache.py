@@ -130,7 +130,7 @@ class StackCache:
             os.replace(temporary, entry)
             sweep_orphans(self.folder)
         except OSError as error:
-            temporary.unlink(missing_ok=True)
+            remove_path(temporary)  # if it was made (not when the folder is a file)
             warnings.warn(
                 f"the distance cache {self.folder} cannot be written ({error}); computing "
                 "without storing",
