@@ -11,7 +11,13 @@ from sklearn.utils.validation import validate_data
 
 from ._param_validation import check_params
 
-__all__ = ["ObjectOutput", "SampleTransformer", "as_sample_list", "median_scale"]
+__all__ = [
+    "ObjectOutput",
+    "SampleTransformer",
+    "as_sample_list",
+    "cast_output",
+    "median_scale",
+]
 
 OUTPUTS = ("default", "pandas", "polars")
 
@@ -26,7 +32,34 @@ def median_scale(matrix) -> float:
     matrix = np.asarray(matrix, dtype=np.float64)
     off = matrix[~np.eye(*matrix.shape, dtype=bool)]
     off = off[np.isfinite(off) & (off > 0)]
-    return float(np.median(off)) if off.size else 1.0
+    if not off.size:
+        return 1.0
+    half = off.size // 2
+    if off.size % 2:
+        return float(np.partition(off, half)[half])
+    low, high = np.partition(off, [half - 1, half])[half - 1 : half + 1]
+    with np.errstate(over="ignore"):
+        middle = (low + high) / 2  # np.median's, to the bit
+    # Two middle values near the largest float: their sum overflowed (a scale of inf
+    # made that part's distances all 0).
+    return float(middle if np.isfinite(middle) else low + (high - low) / 2)
+
+
+def cast_output(values, dtype, what: str) -> np.ndarray:
+    """``values`` (float64, one row per sample) in ``dtype``, refused (naming the first
+    sample) where a finite entry does not fit it: float32 holds up to about 3.4e38."""
+    values = np.asarray(values)
+    with np.errstate(over="ignore"):
+        cast = values.astype(dtype, copy=False)
+    if cast is not values:
+        lost = np.isinf(cast) & np.isfinite(values)
+        if lost.any():
+            i = int(np.flatnonzero(lost.reshape(len(lost), -1).any(axis=1))[0])
+            raise ValueError(
+                f"sample {i}: its {what} overflow {np.dtype(dtype).name}; rescale the "
+                "diagrams, or use dtype='float64'"
+            )
+    return cast
 
 
 def as_sample_list(X, what: str = "meshes") -> list:

@@ -276,3 +276,21 @@ def test_feature_names_and_pandas_output():
     np.testing.assert_array_equal(frame.to_numpy(), est.transform(samples))
     with pytest.raises(NotFittedError, match="not fitted"):
         DiagramDistance().get_feature_names_out()
+
+
+def test_float32_distances_that_overflow_are_refused_naming_the_pair():
+    """The distances were written into a float32 matrix: past 3.4e38, inf."""
+    import pytest
+
+    from sklearn_meshph._base import median_scale
+
+    X = [np.array([[0.0, 1.0]]), np.array([[0.0, 2.0]]), np.array([[0.0, 1e300]])]
+    with pytest.raises(ValueError, match="samples 0 and 2: their distance overflows float32"):
+        DiagramDistance(dtype="float32").fit_transform(X)
+    with pytest.raises(ValueError, match="sample 2 and fitted sample 0: their distance over"):
+        DiagramDistance(dtype="float32").fit(X[:2]).transform(X)
+    assert np.isfinite(DiagramDistance(dtype="float64").fit_transform(X)).all()
+    # The median of two distances near the largest float: their sum overflowed to inf.
+    assert median_scale(np.array([[0.0, 1.7e308], [1e308, 0.0]])) == pytest.approx(1.35e308)
+    rows = np.random.default_rng(0).random((6, 6))
+    assert median_scale(rows) == np.median(rows[~np.eye(6, dtype=bool)])

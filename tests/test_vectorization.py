@@ -506,3 +506,21 @@ def test_make_shapes_resolution_is_checked():
     for bad in ((1, 1), (5, 6, 7), (0, 0), (3000, 3000), (40, 18), np.array([[5, 6]])):
         with pytest.raises(ValueError, match="resolution"):
             make_shapes(1, resolution=bad)
+
+
+@pytest.mark.parametrize(
+    "vectorizer",
+    [
+        DiagramStatistics(dtype="float32"),
+        PersistenceImage(dtype="float32", bandwidth=1e-30, im_range=(0, 1, 0, 1)),
+    ],
+    ids=["statistics", "image"],
+)
+def test_float32_output_that_overflows_is_refused_by_sample(vectorizer):
+    """The float64 values were checked, then cast: entries past 3.4e38 became inf."""
+    X = [np.array([[0.0, 1.0]]), np.array([[0.0, 1e300]])]
+    if isinstance(vectorizer, PersistenceImage):
+        X = [np.array([[0.0, 1.0]]), np.array([[0.0, 0.0]])]
+    with pytest.raises(ValueError, match=r"sample \d: its .* overflow float32"):
+        vectorizer.fit_transform(X)
+    assert np.isfinite(clone(vectorizer).set_params(dtype="float64").fit_transform(X)).all()

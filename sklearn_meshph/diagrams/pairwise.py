@@ -116,8 +116,14 @@ class PairRequest:
             self.row_pairs = np.full(n, m)
 
     def write(self, a, b, values):
-        """Store the values of the block of rows ``a:b``."""
+        """Store the values of the block of rows ``a:b``; a finite value that the
+        matrix's dtype cannot hold (float32 past 3.4e38) is refused, naming its row."""
         matrix, n, m = self.matrix, self.n, self.m
+        if matrix.dtype != values.dtype:
+            with np.errstate(over="ignore"):
+                lost = np.isinf(values.astype(matrix.dtype)) & np.isfinite(values)
+            if lost.any():
+                self._refuse(a, b, int(np.flatnonzero(lost)[0]))
         if self.symmetric:
             first, position = self.first, 0
             for i in range(a, b):
@@ -127,6 +133,21 @@ class PairRequest:
                 position += n - i - first
         else:
             matrix[a:b] = values.reshape(b - a, m)
+
+    def _refuse(self, a, b, position):
+        if self.symmetric:  # rows a, a + 1... hold n - a - first, n - a - 1 - first... values
+            ends = np.cumsum(self.n - np.arange(a, b) - self.first)
+            k = int(np.searchsorted(ends, position, side="right"))
+            row = a + k
+            column = row + self.first + position - (int(ends[k - 1]) if k else 0)
+            pair = f"samples {row} and {column}"
+        else:
+            row, column = a + position // self.m, position % self.m
+            pair = f"sample {row} and fitted sample {column}"
+        raise ValueError(
+            f"{pair}: their distance overflows {self.matrix.dtype.name}; rescale the "
+            "diagrams, or use dtype='float64'"
+        )
 
     def finish(self):
         if self.symmetric and self.diagonal is not None:

@@ -8,7 +8,7 @@ import numpy as np
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.validation import check_is_fitted
 
-from .._base import SampleTransformer, as_sample_list, median_scale
+from .._base import SampleTransformer, as_sample_list, cast_output, median_scale
 from .._param_validation import Interval, Options
 from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .pairwise import PairwiseTransformer, distance_requests, run_plans
@@ -209,7 +209,7 @@ class DiagramDistance(PairwiseTransformer):
             total = sum(scaled)
         else:
             total = sum(part**q for part in scaled) ** (1.0 / q)
-        return total.astype(self.dtype, copy=False)
+        return cast_output(total, self.dtype, "distances")
 
     def _matrix_plan(self, left, right):
         if self.distance_params_["normalization"] == "none":

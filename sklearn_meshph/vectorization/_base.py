@@ -18,7 +18,7 @@ from numbers import Integral, Real
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from .._base import SampleTransformer, as_sample_list
+from .._base import SampleTransformer, as_sample_list, cast_output
 from .._param_validation import Interval, Options
 from .._progress import map_samples, sample_blocks
 from ..diagrams.estimator import DiagramTransformer
@@ -391,9 +391,8 @@ class PackedVectorizer(PolicyTransformer):
         else:
             parts = (packed.block(a, b) for a, b in blocks)
             rows = map_samples(self._block_rows, parts, n_jobs=self.n_jobs, prefer="threads")
-        return check_finite_output(np.vstack(rows), self._output_name).astype(
-            self.dtype, copy=False
-        )
+        values = check_finite_output(np.vstack(rows), self._output_name)
+        return cast_output(values, self.dtype, self._output_name)
 
     def _block_rows(self, packed: Packed) -> np.ndarray:
         columns = [self._compute(k, packed, *packed.position(k)) for k in range(packed.n_diagrams)]

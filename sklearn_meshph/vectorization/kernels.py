@@ -16,6 +16,7 @@ from numbers import Integral
 import numba
 import numpy as np
 
+from .._base import cast_output
 from .._param_validation import Interval, Options
 from ..diagrams.distances import MAX_DIRECTIONS
 from ..diagrams.pairwise import (
@@ -109,7 +110,9 @@ class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
             diagonal=None,
             desc="kernel",
         )
-        return check_finite_output(matrix, "kernel values").astype(self.dtype, copy=False)
+        return cast_output(
+            check_finite_output(matrix, "kernel values"), self.dtype, "kernel values"
+        )
 
 
 def _combined_pairs(left, right, rows, cols, function, n_parts, bandwidths, weights, combine):
