@@ -156,6 +156,7 @@ def test_identical_for_any_n_jobs(name):
         ({"diagram_weights": [1.0, -2.0, 1.0]}, "diagram_weights of diagram position 1"),
         ({"diagram_weights": [1.0, np.nan, 1.0]}, "diagram_weights of diagram position 1"),
         ({"diagram_weights": [0, 0, 0]}, "diagram_weights are all 0"),
+        ({"diagram_weights": [1e308, 1e308, 1]}, "diagram_weights sum to more than float64"),
         ({"diagram_weights": "equal"}, "'diagram_weights' parameter"),
         ({"diagram_weights": [1, 1, 1], "combine": "product"}, "a product has no terms"),
     ],
@@ -412,3 +413,16 @@ def test_nested_cross_validation_on_a_precomputed_stack(monkeypatch):
         make_pipeline(PerDiagramDistance(), kernel, SVC(kernel="precomputed")), grid, cv=KFold(3)
     )
     np.testing.assert_array_equal(cross_val_score(search, samples, y, cv=outer), on_stack)
+
+
+def test_distance_kernel_weights_that_overflow_are_refused():
+    """Weights of 1e308 summed to inf: a mean gave NaN on the diagonal, a sum inf."""
+    square = np.array([[0.0, 1.0], [1.0, 0.0]])
+    stack = np.stack([square, 2 * square], -1)
+    for combine in ("mean", "sum"):
+        kernel = DistanceKernel(diagram_weights=[1e308, 1e308], combine=combine)
+        with pytest.raises(ValueError, match="diagram_weights sum to more than float64"):
+            kernel.fit_transform(stack)
+    kernel = DistanceKernel(diagram_weights=[1e307, 1e307], combine="mean")
+    plain = DistanceKernel(combine="mean").fit_transform(stack)
+    np.testing.assert_allclose(kernel.fit_transform(stack), plain)

@@ -141,6 +141,13 @@ def position_weights(weights, combine: str, n_diagrams: int) -> np.ndarray:
         )
     if not values.any():
         raise ValueError("diagram_weights are all 0: the kernel would vanish")
+    with np.errstate(over="ignore"):
+        total = values.sum()
+    if not np.isfinite(total):  # a sum of kernels of 1 would overflow, a mean be NaN
+        raise ValueError(
+            f"diagram_weights sum to more than float64 holds ({values.max():.3g} at most "
+            "each): scale them down (a mean does not change)"
+        )
     return values
 
 
