@@ -113,6 +113,17 @@ def test_the_scaler_gives_each_block_a_unit_rms_distance():
     np.testing.assert_array_equal(scaled[:, 6:], 1 / np.sqrt(3))
 
 
+@pytest.mark.parametrize("scale", [1e-200, 1e-100, 1e150, 1e200, 1e300])
+def test_the_scaler_holds_at_any_scale_float64_holds(scale):
+    """The variance of features near 1e200 overflowed (a scale of inf: every row 0),
+    that of features near 1e-200 underflowed (a scale of 1: no scaling at all)."""
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(30, 4))
+    expected = DistanceScaler(n_blocks=2).fit_transform(X)
+    got = DistanceScaler(n_blocks=2).fit_transform(X * scale)
+    np.testing.assert_allclose(got, expected, rtol=1e-12)
+
+
 def test_the_scaler_refuses_uneven_blocks_and_names_a_bad_sample():
     X = np.ones((4, 5))
     with pytest.raises(ValueError, match="n_blocks=2 does not divide the 5 features"):
@@ -124,3 +135,6 @@ def test_the_scaler_refuses_uneven_blocks_and_names_a_bad_sample():
     X[2, 1] = np.inf
     with pytest.raises(ValueError, match="sample 2: its features hold NaN or infinite"):
         fitted.transform(X)
+    tiny = DistanceScaler().fit([[0.0], [1e-10]])
+    with pytest.raises(ValueError, match="sample 1: its features divided by the fitted"):
+        tiny.transform([[1.0], [1e300]])

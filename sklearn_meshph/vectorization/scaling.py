@@ -24,6 +24,32 @@ def _finite_rows(X: np.ndarray) -> np.ndarray:
     return X
 
 
+def _block_scales(X: np.ndarray, n_blocks: int) -> np.ndarray:
+    """``sqrt(2 * total variance)`` of each block of columns (1 for a block without
+    variance). Where the variance overflows or underflows (features near 1e308 or
+    1e-200), it is computed on the block divided by its largest magnitude."""
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        scales = np.sqrt(2.0 * X.var(axis=0).reshape(n_blocks, -1).sum(axis=1))
+    blocks = X.reshape(len(X), n_blocks, -1)
+    for b in np.flatnonzero(~np.isfinite(scales) | (scales < _SMALL_SCALE)):
+        top = float(np.abs(blocks[:, b]).max())
+        if top == 0:
+            continue
+        with np.errstate(over="ignore"):
+            scales[b] = np.sqrt(2.0 * (blocks[:, b] / top).var(axis=0).sum()) * top
+        if not np.isfinite(scales[b]):
+            raise ValueError(
+                f"block {b}: the root-mean-square distance between the fitted samples "
+                "exceeds float64; rescale the features"
+            )
+    return np.where(scales > 0, scales, 1.0)
+
+
+#: Scales below this are computed again on the rescaled block (the variance, their
+#: square, is then near or in float64's subnormals).
+_SMALL_SCALE = float(np.sqrt(np.finfo(np.float64).tiny)) * 2**26
+
+
 class DistanceScaler(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
     """Divide each block of columns by its root-mean-square distance between fitted rows.
 
@@ -101,9 +127,7 @@ class DistanceScaler(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
                 f"n_blocks={self.n_blocks} does not divide the {n_features} features into "
                 "equal blocks"
             )
-        variances = X.var(axis=0).reshape(self.n_blocks, -1).sum(axis=1)
-        scales = np.sqrt(2.0 * variances)
-        self.scales_ = np.where(scales > 0, scales, 1.0)
+        self.scales_ = _block_scales(X, self.n_blocks)
         return self
 
     def transform(self, X):
@@ -122,4 +146,12 @@ class DistanceScaler(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
             validate_data(self, X, dtype=np.float64, ensure_all_finite=False, reset=False)
         )
         divisors = np.repeat(self.scales_, X.shape[1] // len(self.scales_))
-        return X / (divisors * np.sqrt(len(self.scales_)))
+        with np.errstate(over="ignore"):
+            scaled = X / (divisors * np.sqrt(len(self.scales_)))
+        bad = ~np.isfinite(scaled).all(axis=1)
+        if bad.any():
+            raise ValueError(
+                f"sample {int(np.flatnonzero(bad)[0])}: its features divided by the fitted "
+                "scales overflow float64 (they are far larger than the fitted samples')"
+            )
+        return scaled
