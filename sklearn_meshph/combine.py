@@ -220,7 +220,19 @@ class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEst
         """
         check_is_fitted(self)
         X = validate_data(self, X, dtype=np.float64, reset=False)
-        return pairwise_distances(X, self.features_, metric=self.metric, n_jobs=self.n_jobs)
+        with np.errstate(over="ignore", invalid="ignore"):
+            distances = pairwise_distances(
+                X, self.features_, metric=self.metric, n_jobs=self.n_jobs
+            )
+        bad = ~np.isfinite(distances)
+        if bad.any():
+            i, j = np.argwhere(bad)[0]
+            what = "NaN" if np.isnan(distances[i, j]) else "beyond float64"
+            raise ValueError(
+                f"sample {i}: its {self.metric} distance to fitted sample {j} is {what} "
+                "(features constant or too large for that metric)"
+            )
+        return distances
 
     @property
     def _n_features_out(self):
@@ -438,6 +450,27 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
             raise ValueError(f"weights holds {len(weights)} numbers for {len(names)} parts {names}")
         return {name: float(w) for name, w in zip(names, weights, strict=True)}
 
+    def _checked(self, parts, matrices, X, n_fitted=None):
+        """The parts' matrices as float arrays, each refused (naming the part) unless of
+        shape ``(len(X), n_fitted)`` (``len(X)`` when fitting) and free of NaN."""
+        n = X.shape[0] if issparse(X) else len(X)
+        shape = (n, n if n_fitted is None else n_fitted)
+        checked = []
+        for (name, _), matrix in zip(parts, matrices, strict=True):
+            matrix = np.asarray(matrix, dtype=float)
+            if matrix.shape != shape:
+                raise ValueError(
+                    f"part {name!r} gave distances of shape {matrix.shape}; expected "
+                    f"{shape} (one row per sample, one column per fitted sample)"
+                )
+            nan = np.isnan(matrix).any(axis=1)
+            if nan.any():
+                raise ValueError(
+                    f"sample {int(np.flatnonzero(nan)[0])}: part {name!r} gave it a NaN distance"
+                )
+            checked.append(matrix)
+        return checked
+
     def _combine(self, matrices):
         total = np.zeros(np.shape(matrices[0]))
         finite = np.ones(total.shape, dtype=bool)  # where no part is infinite itself
@@ -482,6 +515,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         # steps before them (one persistence for the parts that differ only by the
         # diagrams they keep): one wait for the last block, not one per part.
         matrices = run_plans(_plans([part for _, part in parts], X, fit=True))
+        matrices = self._checked(parts, matrices, X)
         self.parts_, self.weights_ = parts, weights
         self.scales_ = {
             name: median_scale(matrix) if self.normalization == "median" else 1.0
@@ -521,7 +555,8 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         check_is_fitted(self, "parts_")
         X = _reusable(X)
-        return self._combine(run_plans(_plans([part for _, part in self.parts_], X, fit=False)))
+        matrices = run_plans(_plans([part for _, part in self.parts_], X, fit=False))
+        return self._combine(self._checked(self.parts_, matrices, X, self._n_features_out))
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

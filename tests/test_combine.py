@@ -238,3 +238,31 @@ def test_weights_that_overflow_are_refused():
     parts = [("a", DiagramDistance()), ("b", DiagramDistance(metric="sliced-wasserstein"))]
     with pytest.raises(ValueError, match="weighted sum of the parts' distances overflows"):
         CombinedDistance(parts, weights=(1e308, 1e308)).fit_transform(diagrams)
+
+
+def test_parts_of_the_wrong_shape_or_with_nan_and_undefined_feature_distances_are_refused():
+    """A (3, 1) part was broadcast over the others silently, a (3, 2) one raised numpy's
+    broadcasting error; NaN went through; FeatureDistance gave NaN for a constant row
+    under the correlation distance, or for features near 1e308."""
+    from scipy.spatial.distance import cdist
+    from sklearn.preprocessing import FunctionTransformer
+
+    X = np.array([[0.0], [1.0], [3.0]])
+    good = FunctionTransformer(lambda A: cdist(A, X, "cityblock"))
+    for bad, message in [
+        (lambda A: A, r"part 'b' gave distances of shape \(3, 1\); expected \(3, 3\)"),
+        (lambda A: cdist(A, X) * np.nan, "sample 0: part 'b' gave it a NaN distance"),
+    ]:
+        combined = CombinedDistance([("a", good), ("b", FunctionTransformer(bad))])
+        with pytest.raises(ValueError, match=message):
+            combined.fit_transform(X)
+    fitted = CombinedDistance([("a", good), ("b", FunctionTransformer(lambda A: cdist(A, X)))])
+    fitted.fit(X)
+    short = FunctionTransformer(lambda A: cdist(A, X[:2]))
+    fitted.parts_[1] = ("b", short)
+    with pytest.raises(ValueError, match=r"shape \(2, 2\); expected \(2, 3\)"):
+        fitted.transform(X[:2])
+    with pytest.raises(ValueError, match="sample 0: its correlation distance .* is NaN"):
+        FeatureDistance("correlation").fit_transform([[1.0, 1.0], [1.0, 2.0]])
+    with pytest.raises(ValueError, match="sample 0: its canberra distance to fitted sample 1"):
+        FeatureDistance().fit_transform([[1e308], [-1e308]])

@@ -40,7 +40,25 @@ def _split(distance):
             "distance must be a CombinedDistance, DiagramDistance or FeatureDistance, or a "
             f"Pipeline ending in one (as make_mesh_distance() returns), got {type(metric).__name__}"
         )
+    if isinstance(metric, CombinedDistance):  # refused before a part is fitted
+        for name, part in metric.transformer_list:
+            _final(name, part)
     return head, metric
+
+
+def _final(name, part):
+    """``(stateless steps or None, final step)`` of a part, which must end in an
+    indexable distance."""
+    stateless, final = None, part
+    if isinstance(part, Pipeline):
+        final = part.steps[-1][1]
+        stateless = part[:-1] if len(part.steps) > 1 else None
+    if not is_indexable(final):
+        raise TypeError(
+            f"part {name!r} ends in a {type(final).__name__}; an index needs "
+            "DiagramDistance or FeatureDistance parts"
+        )
+    return stateless, final
 
 
 def _fitted_parts(metric):
@@ -55,19 +73,7 @@ def _fitted_parts(metric):
         ]
     else:
         named = [("distance", None, metric)]
-    parts = []
-    for name, factor, part in named:
-        stateless, final = None, part
-        if isinstance(part, Pipeline):
-            final = part.steps[-1][1]
-            stateless = part[:-1] if len(part.steps) > 1 else None
-        if not is_indexable(final):
-            raise TypeError(
-                f"part {name!r} ends in a {type(final).__name__}; an index needs "
-                "DiagramDistance or FeatureDistance parts"
-            )
-        parts.append((name, factor, stateless, final))
-    return parts
+    return [(name, factor, *_final(name, part)) for name, factor, part in named]
 
 
 def _total(terms):
