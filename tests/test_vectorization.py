@@ -524,3 +524,15 @@ def test_float32_output_that_overflows_is_refused_by_sample(vectorizer):
     with pytest.raises(ValueError, match=r"sample \d: its .* overflow float32"):
         vectorizer.fit_transform(X)
     assert np.isfinite(clone(vectorizer).set_params(dtype="float64").fit_transform(X)).all()
+
+
+@pytest.mark.parametrize("sampling", ["pixel", "point"])
+def test_an_image_axis_of_zero_width_is_widened_beyond_float64_steps(sampling):
+    """Persistence 1e20 for every point: widened by the bandwidth (1e20 +- 1 == 1e20) the
+    axis kept zero width, and every pixel was 0 (or every row alike)."""
+    X = [np.array([[5.0, 5 + 1e20]]), np.array([[7.0, 7 + 1e20]])]
+    image = PersistenceImage(sampling=sampling, resolution=(3, 3)).fit(X)
+    lo, hi = image.im_ranges_[0, 2:]
+    assert lo < 1e20 < hi
+    pixels = image.transform(X).reshape(2, 3, 3)  # persistence rows, birth columns
+    assert (pixels[:, 1].sum(axis=1) > 0).all() and not pixels[:, [0, 2]].any()
