@@ -536,3 +536,15 @@ def test_an_image_axis_of_zero_width_is_widened_beyond_float64_steps(sampling):
     assert lo < 1e20 < hi
     pixels = image.transform(X).reshape(2, 3, 3)  # persistence rows, birth columns
     assert (pixels[:, 1].sum(axis=1) > 0).all() and not pixels[:, [0, 2]].any()
+
+
+def test_feature_names_follow_the_fitted_grid_after_set_params():
+    """The names were counted from ``resolution`` as set now, the columns from the grid
+    fitted: a pandas output then failed on the length mismatch."""
+    from sklearn_meshph import PersistenceLandscape
+
+    D = [np.array([[0.0, 1.0], [0.2, 0.5]]), np.array([[0.0, 2.0]])]
+    for model in (BettiCurve(resolution=100), PersistenceLandscape(resolution=10)):
+        model.fit(D).set_params(resolution=3)
+        assert model.transform(D).shape[1] == len(model.get_feature_names_out())
+        assert model.set_output(transform="pandas").transform(D).shape[0] == 2

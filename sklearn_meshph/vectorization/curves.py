@@ -6,6 +6,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
+from sklearn.utils.validation import check_is_fitted
 
 from .._param_validation import Interval, Numbers
 from ._base import (
@@ -99,6 +100,11 @@ class _GridFunction(PackedVectorizer):
     def _features_per_position(self) -> int:
         return self.resolution
 
+    def _grid_size(self) -> int:
+        """The fitted grids' points (``resolution`` as it was at ``fit``)."""
+        check_is_fitted(self, "grids_")
+        return len(self.grids_[0]) if self.grids_ else int(self.resolution)
+
     def _fit_positions(self, packed):
         self.grids_ = [
             _sample_grid(
@@ -111,7 +117,7 @@ class _GridFunction(PackedVectorizer):
         return self._curves(packed.points, starts, stops, self.grids_[k])
 
     def _column_names(self) -> list[str]:
-        return [f"{self._feature}_{g}" for g in range(self.resolution)]
+        return [f"{self._feature}_{g}" for g in range(self._grid_size())]
 
     def get_feature_names_out(self, input_features=None):
         """``d<k>_<feature>_<grid index>``, per diagram position ``k``.
@@ -192,7 +198,7 @@ class PersistenceLandscape(_GridFunction):
         return [
             f"landscape{t + 1}_{g}"
             for t in range(self.n_landscapes)
-            for g in range(self.resolution)
+            for g in range(self._grid_size())
         ]
 
 
