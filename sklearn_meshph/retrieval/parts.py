@@ -31,9 +31,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.spatial.distance import cdist
-from sklearn.metrics import pairwise_distances
 
-from ..combine import FeatureDistance
+from ..combine import FeatureDistance, feature_distances
 from ..diagrams import DiagramDistance
 from ..diagrams.distances import kernel_metric
 from ..diagrams.pairwise import as_packed, pack_for_metric, pair_distances
@@ -106,9 +105,7 @@ class IndexedPart:
         the fitted samples ``cols``, as its last step's ``transform`` computes them."""
         final = self.final
         if not self.diagrams:
-            return pairwise_distances(
-                query, self.features[cols], metric=final.metric, n_jobs=final.n_jobs
-            )
+            return feature_distances(query, self.features[cols], final.metric, final.n_jobs)
         rows = np.repeat(np.arange(len(query)), len(cols))
         cols = np.tile(np.asarray(cols, dtype=np.int64), len(query))
         p = float(final.distance_params_["internal_p"])
@@ -176,7 +173,7 @@ class IndexedPart:
         (left, left_counts), (right, right_counts) = query, fitted
         if not self.diagrams:
             final = self.final
-            bound = pairwise_distances(left, right, metric=final.metric, n_jobs=final.n_jobs)
+            bound = feature_distances(left, right, final.metric, final.n_jobs)
             return self.factor * bound
         if self.sliced:
             return np.zeros((len(left), len(right)))
