@@ -325,6 +325,18 @@ def test_retrieval_scores_refuse_what_they_cannot_score():
     D[1, 0] = np.nan
     with pytest.raises(ValueError, match="sample 1: D holds NaN"):
         retrieval_scores(D, [0, 0])
+    # Raw numpy errors before: an empty matrix, classes that do not sort, sparse or
+    # ragged matrices.
+    import scipy.sparse as sp
+
+    with pytest.raises(ValueError, match="D has 0 samples: at least two"):
+        retrieval_scores(np.zeros((0, 0)), [])
+    with pytest.raises(ValueError, match="y must hold classes of one sortable kind"):
+        retrieval_scores(np.zeros((4, 4)), [0, None, 0, None])
+    with pytest.raises(TypeError, match="got a sparse one: pass D.toarray"):
+        retrieval_scores(sp.csr_matrix(np.ones((2, 2))), [0, 0])
+    with pytest.raises(ValueError, match="D must be a square matrix of numbers"):
+        retrieval_scores([[0, 1], [1]], [0, 0])
 
 
 def _part(name):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import issparse
 
 __all__ = ["retrieval_scores"]
 
@@ -45,13 +46,26 @@ def retrieval_scores(D, y) -> dict[str, float]:
     >>> retrieval_scores(D, [0, 0, 1, 1])["nearest_neighbor"]
     0.75
     """
-    D = np.asarray(D, dtype=float)
+    if issparse(D):
+        raise TypeError("D must be a dense distance matrix, got a sparse one: pass D.toarray()")
+    try:
+        D = np.asarray(D, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"D must be a square matrix of numbers: {error}") from error
     y = np.asarray(y)
     if D.ndim != 2 or D.shape[0] != D.shape[1]:
         raise ValueError(f"D must be a square distance matrix, got shape {D.shape}")
     n = len(D)
     if y.shape != (n,):
         raise ValueError(f"y must hold one class per row of D ({n}), got shape {y.shape}")
+    if n < 2:
+        raise ValueError(f"D has {n} samples: at least two are needed to query one another")
+    if y.dtype == object:  # classes must sort: a None or a mixture of kinds does not
+        try:
+            y = np.asarray(y.tolist())
+            np.unique(y)
+        except TypeError as error:
+            raise ValueError(f"y must hold classes of one sortable kind: {error}") from error
     if np.isnan(D).any():
         row = int(np.argwhere(np.isnan(D))[0, 0])
         raise ValueError(f"sample {row}: D holds NaN distances")
