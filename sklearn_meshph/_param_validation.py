@@ -18,6 +18,7 @@ from numbers import Integral, Real
 import numpy as np
 
 __all__ = [
+    "N_JOBS",
     "HasMethods",
     "Interval",
     "InvalidParameterError",
@@ -46,6 +47,8 @@ class Interval:
             return False
         if isinstance(value, Real) and math.isnan(value):
             return False
+        if isinstance(value, np.generic):  # compared as a Python number: a float32
+            value = value.item()  # against 1e300 overflowed in the cast (a warning)
         if self.left is not None:
             if value < self.left or (value == self.left and self.closed in ("right", "neither")):
                 return False
@@ -190,3 +193,15 @@ def validate_params(constraints: dict):
         return wrapper
 
     return decorate
+
+
+#: Most workers joblib accepts (its own limit, refused there with a raw message).
+MAX_JOBS = 1_000_000
+
+#: The constraint of every ``n_jobs``: None, 1 or more workers, or -1, -2... (all the
+#: cores, all but one...); 0 means nothing.
+N_JOBS = [
+    Interval(Integral, 1, MAX_JOBS, closed="both"),
+    Interval(Integral, -MAX_JOBS, -1, closed="both"),
+    None,
+]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from numbers import Integral, Real
+from numbers import Real
 
 import numpy as np
 from scipy.sparse import issparse
@@ -18,7 +18,7 @@ from sklearn.utils import get_tags
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import median_scale
-from ._param_validation import Interval, Options, check_params
+from ._param_validation import N_JOBS, Interval, Options, check_params
 from .diagrams.pairwise import PairwiseTransformer, fit_transform_plan, run_plans, transform_plan
 from .persistence import LowerStarPersistence
 
@@ -205,7 +205,7 @@ class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEst
            [0.5, 0. ]])
     """
 
-    _parameter_constraints: dict = {"metric": [str, callable], "n_jobs": [Integral, None]}
+    _parameter_constraints: dict = {"metric": [str, callable], "n_jobs": N_JOBS}
 
     def __init__(self, metric="canberra", n_jobs=None):
         self.metric = metric

@@ -14,7 +14,7 @@ import numpy as np
 import trimesh
 from sklearn.utils import Bunch, check_random_state
 
-from ._param_validation import Interval, Numbers, Options, validate_params
+from ._param_validation import N_JOBS, Interval, Numbers, Options, validate_params
 from ._progress import map_samples
 from .mesh.reading import COMPRESSIONS
 from .mesh.validation import check_mesh
@@ -76,7 +76,7 @@ def _read_or_error(path, place: str):
     {
         "extensions": [tuple, list],
         "load": ["boolean"],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "on_error": [Options(("raise", "skip"))],
     }

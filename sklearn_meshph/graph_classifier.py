@@ -10,7 +10,7 @@ from numbers import Integral
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.pipeline import FeatureUnion, Pipeline
 
-from ._param_validation import HasMethods, Interval, Numbers, Options, validate_params
+from ._param_validation import N_JOBS, HasMethods, Interval, Numbers, Options, validate_params
 from .leaf_forest import LeafSizeForest
 from .persistence import LowerStarPersistence
 from .size_switch import SizeSwitchClassifier
@@ -64,7 +64,7 @@ def graph_eigen(eigen: dict, times=GRAPH_TIMES) -> LaplacianEigenTransformer:
         "n_estimators": [Interval(Integral, 1, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left"), tuple, list],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
         "verbose": [Interval(Integral, 0, None, closed="left")],
     }

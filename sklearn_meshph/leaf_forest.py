@@ -5,7 +5,7 @@ cross-validation around it stays nested)."""
 from __future__ import annotations
 
 import warnings
-from numbers import Integral
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
@@ -14,7 +14,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import ClassifierScoreMixin
-from ._param_validation import Interval, Options, check_params
+from ._param_validation import N_JOBS, Interval, Options, check_params
 
 __all__ = ["LeafSizeForest"]
 
@@ -106,11 +106,11 @@ class LeafSizeForest(ClassifierScoreMixin, BaseEstimator):
         "bootstrap": ["boolean"],
         "max_features": [
             Interval(Integral, 1, None, closed="left"),
-            Interval(float, 0.0, 1.0, closed="right"),
+            Interval(Real, 0.0, 1.0, closed="right"),
             Options(("sqrt", "log2")),
             None,
         ],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
     }
 
@@ -167,10 +167,13 @@ class LeafSizeForest(ClassifierScoreMixin, BaseEstimator):
         return self
 
     def _forest(self, leaf, seed, *, bootstrap):
+        share = self.max_features
+        if isinstance(share, Real) and not isinstance(share, Integral):
+            share = float(share)  # scikit-learn's forests refuse a NumPy float
         return ExtraTreesClassifier(
             self.n_estimators,
             min_samples_leaf=leaf,
-            max_features=self.max_features,
+            max_features=share,
             bootstrap=bootstrap,
             oob_score=bootstrap,
             n_jobs=self.n_jobs,

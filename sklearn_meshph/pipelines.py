@@ -14,7 +14,7 @@ import numpy as np
 from sklearn.pipeline import FeatureUnion, Pipeline
 from sklearn.preprocessing import FunctionTransformer
 
-from ._param_validation import HasMethods, Interval, Options, validate_params
+from ._param_validation import N_JOBS, HasMethods, Interval, Options, validate_params
 from ._registry import Option, Registry
 from .combine import CombinedDistance, FeatureDistance
 from .diagrams import DiagramDistance
@@ -268,7 +268,7 @@ def all_registries() -> dict[str, Registry]:
     {
         "preset": [Options(PRESETS), Options(PRESETS.aliases)],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
         "verbose": [Interval(Integral, 0, None, closed="left")],
     }
@@ -356,7 +356,7 @@ def _common(memory, n_jobs, random_state, verbose):
 @validate_params(
     {
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
         "verbose": [Interval(Integral, 0, None, closed="left")],
     }

@@ -781,3 +781,35 @@ def test_small_multiplicity_is_reported_exactly():
     assert "eigenvalue 1 " in messages[0] and "multiplicity 3 " in messages[0]
     assert "eigenvalue 4 " in messages[1] and "multiplicity 5 " in messages[1]
     assert not any("at least" in message for message in messages), messages
+
+
+@pytest.mark.parametrize("n_jobs", [0, 10**9, -(10**9)])
+def test_an_n_jobs_joblib_refuses_is_refused_by_name(n_jobs):
+    """n_jobs=0 reached joblib's "n_jobs == 0 in Parallel has no meaning", 10**9 its
+    "Numeric literal ... is too large"."""
+    from sklearn_meshph import DiagramDistance, DiagramStatistics, LaplacianEigenTransformer
+
+    X = [np.array([[0.0, 1.0]])] * 3
+    for estimator in (DiagramStatistics(n_jobs=n_jobs), DiagramDistance(n_jobs=n_jobs)):
+        with pytest.raises(ValueError, match="'n_jobs' parameter of .* Got -?1?0+ instead"):
+            estimator.fit_transform(X)
+    with pytest.raises(ValueError, match="'n_jobs' parameter"):
+        LaplacianEigenTransformer(n_jobs=n_jobs).fit([])
+
+
+def test_numpy_scalars_as_parameters_pass_without_warnings():
+    """A float32 bandwidth compared with the bound 2.7e153 overflowed in the cast (a
+    RuntimeWarning); a float32 share of features was refused by the forest."""
+    import warnings
+
+    from sklearn_meshph import DistanceKernel
+    from sklearn_meshph.leaf_forest import LeafSizeForest
+
+    square = np.array([[0.0, 1.0], [1.0, 0.0]])
+    rows = np.random.default_rng(0).random((20, 3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        kernel = DistanceKernel(bandwidth=np.float32(0.5)).fit_transform(square)
+        forest = LeafSizeForest(max_features=np.float32(0.5), n_estimators=3, random_state=0)
+        forest.fit(rows, [0, 1] * 10)
+    np.testing.assert_allclose(kernel, DistanceKernel(bandwidth=0.5).fit_transform(square))

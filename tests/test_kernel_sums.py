@@ -151,6 +151,8 @@ def test_identical_for_any_n_jobs(name):
         ({"bandwidth": np.inf}, "'bandwidth' parameter"),
         ({"bandwidth": np.nan}, "'bandwidth' parameter"),
         ({"bandwidth": "median"}, "'bandwidth' parameter"),
+        ({"bandwidth": ["1", "2", "3"]}, "'bandwidth' parameter"),  # read as floats before
+        ({"bandwidth": [True, 1.0, 1.0]}, "'bandwidth' parameter"),
         ({"combine": "max"}, "'combine' parameter"),
         ({"diagram_weights": [1.0, 2.0]}, "diagram_weights has 2 values for 3"),
         ({"diagram_weights": [1.0, -2.0, 1.0]}, "diagram_weights of diagram position 1"),

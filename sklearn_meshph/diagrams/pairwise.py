@@ -14,7 +14,7 @@ import numpy as np
 from joblib import delayed, effective_n_jobs
 from sklearn.base import ClassNamePrefixFeaturesOutMixin
 
-from .._param_validation import Interval, Options, validate_params
+from .._param_validation import N_JOBS, Interval, Options, validate_params
 from .._progress import broadcast, parallel, track
 from ._assignment import precedes
 from ._batch import SLICED, pack, pack_sliced, pair_distances
@@ -237,7 +237,7 @@ def _block(function, left, right, start, stop, n_cols, first):
         "metric": [Options(METRICS)],
         "order": [Interval(Real, 1, None, closed="left")],
         "internal_p": [Interval(Real, 1, None, closed="left")],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
         "per_diagram": ["boolean"],

@@ -12,7 +12,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list
-from .._param_validation import HasMethods, Interval, Options
+from .._param_validation import N_JOBS, HasMethods, Interval, Options
 from .._version import VERSION
 from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .estimator import DiagramTransformer
@@ -118,7 +118,7 @@ class PerDiagramDistance(DiagramTransformer):
         "internal_p": [Interval(Real, 1, None, closed="left")],
         "n_directions": [Interval(Integral, 1, MAX_DIRECTIONS, closed="both")],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "dtype": [Options(("float64", "float32"))],
     }
 

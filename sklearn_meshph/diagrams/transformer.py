@@ -9,7 +9,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list, cast_output, median_scale
-from .._param_validation import Interval, Options
+from .._param_validation import N_JOBS, Interval, Options
 from .distances import MAX_DIRECTIONS, METRICS, kernel_metric
 from .pairwise import PairwiseTransformer, distance_requests, run_plans
 from .validation import check_samples
@@ -122,7 +122,7 @@ class DiagramDistance(PairwiseTransformer):
         "metric": [Options(METRICS)],
         "order": [Interval(Real, 1, None, closed="left")],
         "internal_p": [Interval(Real, 1, None, closed="left")],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "dtype": [Options(("float64", "float32"))],
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "normalization": [Options(("none", "median"))],

@@ -9,7 +9,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from .._base import ObjectOutput, SampleTransformer
-from .._param_validation import Interval, Options
+from .._param_validation import N_JOBS, Interval, Options
 from .._progress import map_samples, sample_blocks
 from ..graph.validation import Graph
 from ..inputs import check_input
@@ -252,7 +252,7 @@ class LowerStarPersistence(ObjectOutput, SampleTransformer, auto_wrap_output_key
         "filtration": [Options(FILTRATIONS)],
         "essential": [Options(ESSENTIAL_POLICIES)],
         "min_persistence": [Interval(Real, 0, None, closed="left")],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "verbose": [Interval(Integral, 0, None, closed="left")],
         "parts": [tuple, None],
     }

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from sklearn.utils import check_random_state
 
 from .._base import ObjectOutput, SampleTransformer
-from .._param_validation import HasMethods, Interval, Options
+from .._param_validation import N_JOBS, HasMethods, Interval, Options
 from .._progress import map_samples
 from .._threads import one_blas_thread
 from ..graph.validation import Graph
@@ -323,7 +323,7 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
         "components": [Options(COMPONENTS)],
         "weld": ["boolean"],
         "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
         "solver": [Options(SOLVERS)],
         "verbose": [Interval(Integral, 0, None, closed="left")],

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import sys
 import warnings
-from numbers import Integral, Real
+from numbers import Real
 
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer, as_sample_list, cast_output
-from .._param_validation import Interval, Options
+from .._param_validation import N_JOBS, Interval, Numbers, Options
 from .._progress import map_samples, sample_blocks
 from ..diagrams.estimator import DiagramTransformer
 from ..diagrams.validation import Packed, pack_samples
@@ -61,13 +61,8 @@ class _PerPosition:
     1-d sequence of numbers (its length is checked against the fitted samples)."""
 
     def __call__(self, value) -> bool:
-        if isinstance(value, str | bytes):
-            return False
-        try:
-            values = np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            return False
-        return values.ndim == 1 and values.size > 0
+        # Real numbers only: "1" and True were read as 1.0 by a conversion to floats.
+        return Numbers()(value) and len(value) > 0
 
     def __str__(self) -> str:
         return "a sequence of floats (one per diagram position)"
@@ -170,7 +165,7 @@ def combine_positions(kernels, combine: str, weights: np.ndarray) -> np.ndarray:
 #: The parameters every vectorizer and kernel has, and their constraints.
 COMMON_CONSTRAINTS: dict = {
     "infinite": [Options(INFINITE_POLICIES)],
-    "n_jobs": [Integral, None],
+    "n_jobs": N_JOBS,
     "dtype": [Options(("float64", "float32"))],
     "essential": [Options(("deprecated", *INFINITE_POLICIES))],
 }

@@ -14,7 +14,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
 from .._base import SampleTransformer
-from .._param_validation import Interval, Options
+from .._param_validation import N_JOBS, Interval, Options
 from ..diagrams.distances import MAX_DIRECTIONS
 from ..diagrams.per_diagram import PerDiagramDistance
 from ..persistence import LowerStarPersistence
@@ -210,7 +210,7 @@ class GraphPairDistances(SampleTransformer):
         "node_bandwidth": [Interval(Real, 1e-12, 1e12, closed="both")],
         "n_random_features": [Interval(Integral, 1, 100_000, closed="both")],
         "features": [Options(("standardized", "canberra"))],
-        "n_jobs": [Integral, None],
+        "n_jobs": N_JOBS,
         "random_state": ["random_state"],
     }
 
