@@ -548,3 +548,13 @@ def test_feature_names_follow_the_fitted_grid_after_set_params():
         model.fit(D).set_params(resolution=3)
         assert model.transform(D).shape[1] == len(model.get_feature_names_out())
         assert model.set_output(transform="pandas").transform(D).shape[0] == 2
+
+
+def test_weights_that_are_not_numbers_and_ragged_distances_name_the_problem():
+    from sklearn_meshph import DistanceKernel
+
+    image = PersistenceImage(weight=lambda rows: ["a"] * len(rows))
+    with pytest.raises(ValueError, match="sample 0, diagram 0: weight must map .* numbers"):
+        image.fit_transform([np.array([[0.0, 1.0]])])
+    with pytest.raises(ValueError, match="X must be a rectangular array of distances"):
+        DistanceKernel().fit_transform([[0, 1], [1]])

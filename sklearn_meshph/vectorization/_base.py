@@ -231,10 +231,17 @@ def point_weights(packed: Packed, starts, stops, weight, power=1.0) -> np.ndarra
         for start, stop in zip(starts, stops, strict=True):
             if stop == start:
                 continue
-            values = np.asarray(weight(points[start:stop].copy()), dtype=np.float64)
+            sample = packed.where(start).rsplit(":", 1)[0]
+            try:
+                values = np.asarray(weight(points[start:stop].copy()), dtype=np.float64)
+            except (TypeError, ValueError) as error:
+                raise ValueError(
+                    f"{sample}: weight must map an (n, 2) array of (birth, death) rows to "
+                    f"n numbers; its values could not be read as numbers ({error})"
+                ) from error
             if values.size != stop - start:
                 raise ValueError(
-                    f"{packed.where(start).rsplit(':', 1)[0]}: weight must map an (n, 2) "
+                    f"{sample}: weight must map an (n, 2) "
                     "array of (birth, death) rows to n finite weights; got "
                     f"{values.shape} values for {stop - start} rows"
                 )

@@ -209,7 +209,10 @@ def _distances(X) -> np.ndarray:
     NaN."""
     if sp.issparse(X):
         raise TypeError("X must be a dense array of distances, got a sparse matrix")
-    distances = np.asarray(X)
+    try:
+        distances = np.asarray(X)
+    except ValueError as error:  # rows of different lengths
+        raise ValueError(f"X must be a rectangular array of distances: {error}") from error
     if distances.dtype.kind not in "iuf":
         raise TypeError(f"X must hold real distances, got an array of dtype {distances.dtype}")
     if distances.dtype not in (np.float32, np.float64):
