@@ -54,18 +54,26 @@ def plot_diagram(diagram, ax=None, *, labels=None, title=None):
     lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     pad = 0.05 * (hi - lo or 1.0)
     inf_level = hi + 4 * pad
+    # A (colour, marker) per diagram, distinct for up to 100 (the colour cycle and the
+    # markers both repeated after 10: diagrams 0 and 10 looked alike).
+    colors = pyplot().get_cmap("tab10").colors
     markers = "osD^v<>p*h"
     for k, d in enumerate(diagrams):
         deaths = np.where(np.isfinite(d[:, 1]), d[:, 1], inf_level)
         label = labels[k] if labels is not None else f"diagram {k}" if len(diagrams) > 1 else None
-        ax.scatter(d[:, 0], deaths, s=18, marker=markers[k % len(markers)], label=label, alpha=0.8)
+        if not len(d) and label is not None:
+            label = f"{label} (empty)"
+        style = {"color": colors[k % 10], "marker": markers[(k // 10 + k) % len(markers)]}
+        ax.scatter(d[:, 0], deaths, s=18, label=label, alpha=0.8, **style)
     ax.plot([lo - pad, inf_level], [lo - pad, inf_level], color="0.5", lw=0.8)
     if any((~np.isfinite(d[:, 1])).any() for d in diagrams):
         ax.axhline(inf_level, color="0.5", lw=0.8, ls="--")
         ax.text(lo - pad, inf_level, " inf", va="bottom", fontsize=8)
     ax.set_xlabel("birth")
     ax.set_ylabel("death")
-    if len(diagrams) > 1:
+    if len(diagrams) > 5:  # beside the axes, not over the points
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    elif len(diagrams) > 1:
         ax.legend(fontsize=7, loc="lower right")
     if title:
         ax.set_title(title)

@@ -139,6 +139,14 @@ def test_plots_are_written(tmp_path):
     plotting.plot_diagram((diagram, diagram[:2]), ax=axes[1], labels=["H0", "ess"])
     assert [len(c.get_offsets()) for c in axes[1].collections] == [3, 2]
     fig.savefig(tmp_path / "diagrams.png")
+    # Fifteen diagrams (the default's): diagrams 0 and 10 had one colour and marker.
+    many = plotting.plot_diagram(tuple([diagram] * 14 + [np.empty((0, 2))]), ax=fig.subplots())
+    styles = {
+        (tuple(c.get_facecolor()[0][:3]), c.get_paths()[0].vertices.tobytes())
+        for c in many.collections
+        if len(c.get_offsets())
+    }
+    assert len(styles) == 14 and many.get_legend().get_texts()[-1].get_text().endswith("(empty)")
     ax = plotting.plot_diagram(diagram[:2])  # a new figure of its own
     assert ax not in axes and len(ax.collections[0].get_offsets()) == 2
     mesh = trimesh.creation.icosphere(1)
