@@ -3,10 +3,13 @@
 import numpy as np
 import pytest
 from conftest import irregular_ellipsoid
+from sklearn.base import clone
+from sklearn.pipeline import make_pipeline
 
 from sklearn_meshph import (
     CombinedDistance,
     DiagramDistance,
+    FeatureDistance,
     LaplacianEigenTransformer,
     LowerStarPersistence,
     PersistenceImage,
@@ -47,11 +50,13 @@ def test_a_generator_through_persistence_and_a_combination():
     ).fit_transform(iter(MESHES))
     diagrams = LowerStarPersistence().fit_transform(iter(fields))
     assert len(diagrams) == len(MESHES)
+    spectrum = make_pipeline(ShapeDNA(n_eigenpairs=6), FeatureDistance())
     combined = CombinedDistance(
-        [("dna", ShapeDNA(n_eigenpairs=6)), ("again", ShapeDNA(n_eigenpairs=6))]
+        [("dna", spectrum), ("again", clone(spectrum))], normalization="none"
     )
-    # ShapeDNA gives features, not distances: what matters here is that both parts see X.
-    assert combined.fit_transform(f for f in fields).shape == (3, 5)
+    # Both parts see X (a generator is read once): twice the one part's distances.
+    twice = combined.fit_transform(f for f in fields)
+    np.testing.assert_allclose(twice, 2 * clone(spectrum).fit_transform(fields))
 
 
 @pytest.mark.parametrize(
