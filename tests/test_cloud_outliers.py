@@ -188,3 +188,21 @@ def test_stray_points_are_reported_as_their_share_of_the_area_not_all_of_it():
     with pytest.warns(MeshCleaningWarning, match="1 other components"):
         (field,) = fields([np.vstack([sphere, small])])
     assert field.cleaning.area_share == pytest.approx(1 / 10, rel=0.05)
+
+
+def test_far_points_that_coincide_are_counted_as_far_not_welded():
+    """Far points clipped to the same coordinates (1e100 and 2e100 on the diagonal), or
+    a stray point listed twice, were merged first and reported as welded: 4 outliers
+    became 2 far points and 2 welded ones."""
+    sphere = sphere_points()
+    far = np.array([[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [-1.0, -1.0, -1.0], [-3.0, -3.0, -3.0]])
+    stray = np.array([[9.0, 0.0, 0.0], [9.0, 0.0, 0.0]])
+    for extra in (far * 1e100, stray):
+        with pytest.warns(MeshCleaningWarning, match=f"of which {len(extra)} far points"):
+            (field,) = fields([np.vstack([sphere, extra])])
+        report = field.cleaning
+        assert report.n_far_points == report.n_component_vertices == len(extra)
+        assert report.n_welded == 0
+        kept = len(field.vertices)
+        assert report.n_input_vertices == kept + report.n_welded + report.n_component_vertices
+        np.testing.assert_array_equal(field.input_to_kept[len(sphere) :], -1)

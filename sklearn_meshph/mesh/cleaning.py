@@ -71,6 +71,7 @@ class CleaningReport:
     n_far_points : int
         Points of a point cloud dropped for lying far from the rest for the cloud's own
         sampling (stray points, small far clusters; counted among the other components).
+        Input points that coincide with a far point are far points, not welded ones.
         Always warned about, whatever their share: an outlier is a fact about the data.
     """
 

@@ -284,18 +284,24 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     edges = _edges(triangles, output_of_built)
 
     n_unreferenced = int(np.count_nonzero(~referenced))
+    # Points merged into a far point are far points too, not welded ones (far points
+    # clipped to the same coordinates, or a stray point listed twice).
+    far = np.flatnonzero(~near)
+    n_far_inputs = int(np.count_nonzero(np.isin(representative, distinct[far])))
+    n_far_merged = n_far_inputs - len(far)
+    n_vertices = len(distinct) + n_far_merged  # after welding
     report = CleaningReport(
         n_input_vertices=n_input,
-        n_welded=n_input - len(distinct),
+        n_welded=n_input - n_vertices,
         n_degenerate_faces=0,
         n_repeated_faces=0,
         n_unreferenced_vertices=n_unreferenced,
         n_other_components=n_far + n_other,
-        n_component_vertices=len(distinct) - n_unreferenced - n_kept,
+        n_component_vertices=n_vertices - n_unreferenced - n_kept,
         n_component_faces=0,
-        vertex_share=(len(distinct) - n_kept) / len(distinct),
+        vertex_share=(n_vertices - n_kept) / n_vertices,
         area_share=area_share,
-        n_far_points=int(np.count_nonzero(~near)),
+        n_far_points=n_far_inputs,
     )
     clean = CleanMesh(
         vertices=np.ascontiguousarray(points[vertex_indices]),
