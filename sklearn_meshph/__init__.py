@@ -11,7 +11,7 @@ clouds as input: validation, files, their Laplacian and neighbourhood graph),
 :mod:`.plotting` and :mod:`.cli` beside them.
 """
 
-from . import vectorization
+from . import _interrupt, vectorization  # noqa: F401 (_interrupt first: see its docstring)
 from ._version import __version__ as __version__
 from .combine import CombinedDistance, FeatureDistance
 from .datasets import load_mesh_folder, make_shapes, sample_point_cloud

@@ -681,3 +681,41 @@ def test_a_disk_that_fills_at_the_pictures_keeps_the_data_files(tmp_path, monkey
     # (mkstemp's were 0600: other users could not read it).
     modes = {os.stat(output / name).st_mode & 0o777 for name in summary["files"]}
     assert len(modes) == 1, modes
+
+
+@pytest.mark.parametrize("argv0", ["-m", "/somewhere/bin/sklearn-meshph", "library.py"])
+def test_ctrl_c_while_the_package_is_imported_is_one_line(argv0):
+    """The package's imports take seconds before main() can catch anything: Ctrl-C
+    then printed a traceback of wherever the import was. Run as the main job, an
+    uncaught KeyboardInterrupt is one line; imported by a library, it is untouched."""
+    code = (
+        f"import sys; sys.argv = [{argv0!r}]; import sklearn_meshph._interrupt; "
+        "raise KeyboardInterrupt"
+    )
+    process = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=300)
+    stderr = process.stderr.decode()
+    assert process.returncode != 0
+    if argv0 == "library.py":
+        assert "Traceback" in stderr and "KeyboardInterrupt" in stderr
+    else:
+        assert stderr == "interrupted\n"
+    # Other exceptions keep their traceback.
+    other = code.replace("KeyboardInterrupt", "ValueError('kept')")
+    process = subprocess.run([sys.executable, "-c", other], capture_output=True, timeout=300)
+    assert "Traceback" in process.stderr.decode() and "ValueError: kept" in process.stderr.decode()
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
+def test_ctrl_c_at_the_start_of_the_main_job_is_one_line(tmp_path):
+    import signal
+    import time
+
+    argv = [sys.executable, "-m", "sklearn_meshph", "--n-per-class", "2", "--no-plots"]
+    process = subprocess.Popen(
+        [*argv, "--output", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    time.sleep(0.5)  # within the imports on any machine this suite runs on
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=300)
+    assert process.returncode in (-signal.SIGINT, 130), stderr
+    assert stderr.decode().endswith("interrupted\n") and b"Traceback" not in stderr
