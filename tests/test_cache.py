@@ -417,3 +417,42 @@ def test_hostile_orphans_are_swept_without_recursion_or_following_links(tmp_path
     cache_module.remove_path(outside / "keep.txt")
     assert not (outside / "keep.txt").exists()
     cache_module.remove_path(tmp_path / "nothing here")  # nothing: no error
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs POSIX")
+def test_removal_sets_no_mode_through_a_name_swapped_for_a_link(tmp_path):
+    """The permissions of a folder lacking the owner's were set by name, following a
+    link swapped in since the folder was looked at, with the folder's own bits (set-id
+    included): whoever could write the cache folder could make a file of the user's
+    world-writable and setuid. They are set through a descriptor of the folder looked
+    at, to the owner's read, write and search bits added to its permissions, no set-id
+    bit."""
+    folder = tmp_path / "cache"
+    folder.mkdir()
+    victim = tmp_path / "victim"
+    victim.write_text("the user's")
+    victim.chmod(0o600)
+    looked_at = folder / ".x.tmp"
+    looked_at.mkdir()
+    looked_at.chmod(0o6077)
+    info = os.stat(looked_at, follow_symlinks=False)
+    os.rename(looked_at, folder / ".moved.tmp")  # the swap, after the look
+    os.symlink(victim, looked_at)
+    parent = os.open(folder, os.O_RDONLY)
+    try:
+        assert cache_module._open_folder(parent, ".x.tmp", info) is None
+    except OSError:
+        pass  # refused to open the link: as good
+    finally:
+        os.close(parent)
+    assert stat.S_IMODE(victim.stat().st_mode) == 0o600
+    cache_module.remove_path(folder / ".moved.tmp")  # the folder itself: no set-id kept
+    assert not (folder / ".moved.tmp").exists()
+    (folder / ".moved.tmp").mkdir()
+    (folder / ".moved.tmp").chmod(0o6077)
+    info = os.stat(folder / ".moved.tmp")
+    parent = os.open(folder, os.O_RDONLY)
+    inner = cache_module._open_folder(parent, ".moved.tmp", info)
+    os.close(inner)
+    os.close(parent)
+    assert stat.S_IMODE(os.stat(folder / ".moved.tmp").st_mode) == 0o777

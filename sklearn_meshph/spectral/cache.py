@@ -204,17 +204,12 @@ def _remove_at(folder: int, name: str, depth: int) -> None:
             return
         if depth >= _MAX_REMOVAL_DEPTH:
             return
-        mode = stat.S_IMODE(info.st_mode)
-        if mode & stat.S_IRWXU != stat.S_IRWXU:
-            # Follows a link swapped in since the stat: that grants, never removes.
-            os.chmod(name, mode | stat.S_IRWXU, dir_fd=folder)
-        inner = os.open(name, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=folder)
+        inner = _open_folder(folder, name, info)
     except OSError:
         return
+    if inner is None:
+        return
     try:
-        found = os.fstat(inner)
-        if (found.st_dev, found.st_ino) != (info.st_dev, info.st_ino):
-            return  # swapped since the stat
         with os.scandir(inner) as listing:
             names = [item.name for item in listing]
         for child in names:
@@ -227,6 +222,56 @@ def _remove_at(folder: int, name: str, depth: int) -> None:
         os.rmdir(name, dir_fd=folder)
     except OSError:
         pass
+
+
+def _same(found, info) -> bool:
+    return stat.S_ISDIR(found.st_mode) and (found.st_dev, found.st_ino) == (
+        info.st_dev,
+        info.st_ino,
+    )
+
+
+def _owner_may_write(descriptor: int, found) -> None:
+    """The folder behind ``descriptor`` given its owner's read, write and search
+    permission (and nothing else: no set-id bit passes), if it lacks them. Through the
+    descriptor, never a name: a name may have been swapped for a link since."""
+    mode = stat.S_IMODE(found.st_mode) & 0o777
+    if mode & stat.S_IRWXU != stat.S_IRWXU:
+        try:
+            os.fchmod(descriptor, mode | stat.S_IRWXU)
+        except OSError:  # another user's folder, an O_PATH descriptor
+            os.chmod(f"/proc/self/fd/{descriptor}", mode | stat.S_IRWXU)
+
+
+def _open_folder(folder: int, name: str, info):
+    """A descriptor of the folder ``name`` that ``info`` describes (None if it was
+    swapped since), opened without following links, writable by its owner. A folder
+    its owner may not even read is reached by an ``O_PATH`` descriptor (Linux) and
+    its permissions set through ``/proc/self/fd``."""
+    flags = os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW
+    try:
+        inner = os.open(name, flags, dir_fd=folder)
+    except PermissionError:
+        if not hasattr(os, "O_PATH"):
+            raise
+        handle = os.open(name, os.O_PATH | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=folder)
+        try:
+            found = os.fstat(handle)
+            if not _same(found, info):
+                return None
+            _owner_may_write(handle, found)
+        finally:
+            os.close(handle)
+        inner = os.open(name, flags, dir_fd=folder)
+    found = os.fstat(inner)
+    if not _same(found, info):  # swapped since the stat
+        os.close(inner)
+        return None
+    try:
+        _owner_may_write(inner, found)
+    except OSError:
+        pass  # what cannot be removed stays
+    return inner
 
 
 def _read_array(path: Path, dtype, max_size: int, ndim: int, digest=None) -> np.ndarray:
