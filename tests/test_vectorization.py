@@ -526,16 +526,20 @@ def test_float32_output_that_overflows_is_refused_by_sample(vectorizer):
     assert np.isfinite(clone(vectorizer).set_params(dtype="float64").fit_transform(X)).all()
 
 
-@pytest.mark.parametrize("sampling", ["pixel", "point"])
-def test_an_image_axis_of_zero_width_is_widened_beyond_float64_steps(sampling):
-    """Persistence 1e20 for every point: widened by the bandwidth (1e20 +- 1 == 1e20) the
-    axis kept zero width, and every pixel was 0 (or every row alike)."""
+@pytest.mark.parametrize("resolution", [3, 4, 20])
+def test_an_image_axis_of_zero_width_at_1e20_still_sees_the_points(resolution):
+    """Persistence 1e20 for every point: widened by the bandwidth (1e20 +- 1 == 1e20)
+    the axis kept zero width, and every pixel was 0. Pixels are widened by float64
+    steps; grid points stay on the points (widened, an even grid stepped over them)."""
     X = [np.array([[5.0, 5 + 1e20]]), np.array([[7.0, 7 + 1e20]])]
-    image = PersistenceImage(sampling=sampling, resolution=(3, 3)).fit(X)
-    lo, hi = image.im_ranges_[0, 2:]
+    pixel = PersistenceImage(sampling="pixel", resolution=(3, resolution)).fit(X)
+    lo, hi = pixel.im_ranges_[0, 2:]
     assert lo < 1e20 < hi
-    pixels = image.transform(X).reshape(2, 3, 3)  # persistence rows, birth columns
-    assert (pixels[:, 1].sum(axis=1) > 0).all() and not pixels[:, [0, 2]].any()
+    point = PersistenceImage(resolution=(3, resolution)).fit(X)  # sampling="point"
+    for image in (pixel, point):
+        values = image.transform(X).reshape(2, resolution, 3)  # persistence rows
+        assert (values.sum(axis=(1, 2)) > 0).all()
+        assert not np.array_equal(values[0], values[1])  # births 5 and 7 told apart
 
 
 def test_feature_names_follow_the_fitted_grid_after_set_params():

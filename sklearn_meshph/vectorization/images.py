@@ -53,7 +53,8 @@ class PersistenceImage(PackedVectorizer):
         pair increasing and finite; ``None`` or NaN entries are learned by ``fit``, per
         diagram position, as the extremes of the fitted points. A learned axis of zero
         width (all births equal, as in Rips H0 diagrams) is widened by ``bandwidth`` on
-        each side (by the axis's pixels times float64's step there, if that is more).
+        each side (pixels: by the axis's pixels times float64's step there, if that is
+        more).
     sampling : {{"point", "pixel"}}, default="point"
         ``"point"``: the density at the grid points (gudhi's convention);
         ``"pixel"``: the mass of the Gaussians inside each pixel, the range split into
@@ -148,10 +149,14 @@ class PersistenceImage(PackedVectorizer):
             for axis, name in ((0, "im_range (births)"), (2, "im_range (persistence)")):
                 lo, hi = resolve_range(given[axis : axis + 2], learned[axis : axis + 2], name)
                 if lo == hi:  # a learned axis of zero width: its pixels would hold nothing
-                    # Widened by the bandwidth, or by as many steps of float64 as pixels
-                    # where the bandwidth is below them (1e20 +- 1 is 1e20).
-                    steps = self.resolution[axis // 2] * float(np.spacing(abs(lo)))
-                    width = max(float(self.bandwidth), steps)
+                    # Widened by the bandwidth; pixels, by as many steps of float64 as
+                    # pixels where the bandwidth is below them (1e20 +- 1 is 1e20: pixels
+                    # of no width hold nothing). Grid points keep a width of 0 there:
+                    # all at the points, they see them (a wider grid would step over).
+                    width = float(self.bandwidth)
+                    if self.sampling == "pixel":
+                        steps = self.resolution[axis // 2] * float(np.spacing(abs(lo)))
+                        width = max(width, steps)
                     lo, hi = lo - width, hi + width
                 axes += [lo, hi]
             ranges.append(axes)
