@@ -334,8 +334,9 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         Weight of each part, finite and non-negative: by name (missing parts weigh 1;
         a name that is not a part's is refused by ``fit``), or one per part in the
         order of ``transformer_list``. ``None``: all 1. A part of weight 0 is left
-        out of the sum (its infinite distances too; it is still fitted, so that a
-        weight set after ``fit`` stays ignored, like every parameter).
+        out: neither fitted nor computed (its infinite distances, and whatever it
+        would refuse, with it), its scale 1; the weights are those of ``fit``, so a
+        weight set after ``fit`` is ignored until the next one, like every parameter.
     normalization : {"median", "none"}, default="median"
         ``"median"`` divides each part by the median of its positive finite
         off-diagonal distances on the fitted samples, learned by ``fit``: parts measured
@@ -468,13 +469,17 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
             raise ValueError(f"weights holds {len(weights)} numbers for {len(names)} parts {names}")
         return {name: float(w) for name, w in zip(names, weights, strict=True)}
 
-    def _checked(self, parts, matrices, X, n_fitted=None):
-        """The parts' matrices as float arrays, each refused (naming the part) unless of
-        shape ``(len(X), n_fitted)`` (``len(X)`` when fitting) and free of NaN."""
+    def _matrices(self, parts, weights, X, n_fitted=None):
+        """The matrices of the parts of positive weight on ``X`` (None for the others),
+        as float arrays, each refused (naming the part) unless of shape ``(len(X),
+        n_fitted)`` (``len(X)`` when fitting) and free of NaN; and that shape."""
         n = X.shape[0] if issparse(X) else len(X)
         shape = (n, n if n_fitted is None else n_fitted)
-        checked = []
-        for (name, _), matrix in zip(parts, matrices, strict=True):
+        used = [k for k, (name, _) in enumerate(parts) if weights[name] > 0]
+        plans = _plans([parts[k][1] for k in used], X, fit=n_fitted is None)
+        checked = [None] * len(parts)
+        for k, matrix in zip(used, run_plans(plans) if used else [], strict=True):
+            name = parts[k][0]
             matrix = np.asarray(matrix, dtype=float)
             if matrix.shape != shape:
                 raise ValueError(
@@ -486,15 +491,15 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
                 raise ValueError(
                     f"sample {int(np.flatnonzero(nan)[0])}: part {name!r} gave it a NaN distance"
                 )
-            checked.append(matrix)
-        return checked
+            checked[k] = matrix
+        return checked, shape
 
-    def _combine(self, matrices):
-        total = np.zeros(np.shape(matrices[0]))
+    def _combine(self, matrices, shape):
+        total = np.zeros(shape)
         finite = np.ones(total.shape, dtype=bool)  # where no part is infinite itself
         for (name, _), matrix in zip(self.parts_, matrices, strict=True):
             weight = self.weights_[name]
-            if weight > 0:  # 0 * inf would be NaN: a weight-0 part is left out
+            if weight > 0:  # a weight-0 part is left out (0 * inf would be NaN)
                 factor = weight / self.scales_[name]
                 if not np.isfinite(factor):
                     raise ValueError(
@@ -532,14 +537,15 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         # Every part's diagram distances are computed in one parallel call, after the
         # steps before them (one persistence for the parts that differ only by the
         # diagrams they keep): one wait for the last block, not one per part.
-        matrices = run_plans(_plans([part for _, part in parts], X, fit=True))
-        matrices = self._checked(parts, matrices, X)
+        matrices, shape = self._matrices(parts, weights, X)
         self.parts_, self.weights_ = parts, weights
         self.scales_ = {
-            name: median_scale(matrix) if self.normalization == "median" else 1.0
+            name: median_scale(matrix)
+            if self.normalization == "median" and matrix is not None
+            else 1.0
             for (name, _), matrix in zip(parts, matrices, strict=True)
         }
-        combined = self._combine(matrices)
+        combined = self._combine(matrices, shape)
         self._n_features_out = combined.shape[1]
         return combined
 
@@ -573,8 +579,8 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         """
         check_is_fitted(self, "parts_")
         X = _reusable(X)
-        matrices = run_plans(_plans([part for _, part in self.parts_], X, fit=False))
-        return self._combine(self._checked(self.parts_, matrices, X, self._n_features_out))
+        matrices, shape = self._matrices(self.parts_, self.weights_, X, self._n_features_out)
+        return self._combine(matrices, shape)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

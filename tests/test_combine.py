@@ -266,3 +266,29 @@ def test_parts_of_the_wrong_shape_or_with_nan_and_undefined_feature_distances_ar
         FeatureDistance("correlation").fit_transform([[1.0, 1.0], [1.0, 2.0]])
     with pytest.raises(ValueError, match="sample 0: its canberra distance to fitted sample 1"):
         FeatureDistance().fit_transform([[1e308], [-1e308]])
+
+
+def test_a_part_of_weight_0_is_neither_fitted_nor_computed():
+    """A weight-0 part that would refuse its input (a NaN distance) made the whole
+    combination fail; an index refused a weight-0 part it cannot index."""
+    from sklearn.preprocessing import FunctionTransformer
+
+    from sklearn_meshph import ShapeNeighbors
+
+    F = np.array([[1.0, 1.0, 1.0], [1.0, 2.0, 3.0], [3.0, 1.0, 2.0], [2.0, 2.0, 1.0]])
+    parts = [("a", FeatureDistance()), ("b", FeatureDistance(metric="correlation"))]
+    combined = CombinedDistance(parts, weights={"b": 0})
+    np.testing.assert_array_equal(
+        combined.fit_transform(F), CombinedDistance(parts[:1]).fit_transform(F)
+    )
+    assert combined.scales_["b"] == 1.0 and not hasattr(combined.parts_[1][1], "features_")
+    np.testing.assert_array_equal(combined.transform(F[:2]), combined.fit_transform(F)[:2])
+    with pytest.raises(ValueError, match="correlation distance .* is NaN"):
+        CombinedDistance(parts).fit_transform(F)
+    other = CombinedDistance(
+        [("a", FeatureDistance()), ("c", FunctionTransformer(lambda X: X))], weights=[1, 0]
+    )
+    index = ShapeNeighbors(other, n_neighbors=2).fit(list(F))
+    assert index.kneighbors(list(F[:1]))[1].shape == (1, 2)
+    nothing = CombinedDistance(parts, weights=[0, 0]).fit_transform(F)
+    np.testing.assert_array_equal(nothing, np.zeros((4, 4)))

@@ -41,8 +41,10 @@ def _split(distance):
             f"Pipeline ending in one (as make_mesh_distance() returns), got {type(metric).__name__}"
         )
     if isinstance(metric, CombinedDistance):  # refused before a part is fitted
+        weights = metric._fitted_weights()
         for name, part in metric.transformer_list:
-            _final(name, part)
+            if weights[name] > 0:  # a part of weight 0 is left out
+                _final(name, part)
     return head, metric
 
 
