@@ -428,3 +428,18 @@ def test_distance_kernel_weights_that_overflow_are_refused():
     kernel = DistanceKernel(diagram_weights=[1e307, 1e307], combine="mean")
     plain = DistanceKernel(combine="mean").fit_transform(stack)
     np.testing.assert_allclose(kernel.fit_transform(stack), plain)
+
+
+def test_per_position_parameters_take_any_sequence_of_numbers():
+    """A pandas Series or a range was refused once the strings and bools were."""
+    import pandas as pd
+
+    square = np.array([[0.0, 1.0], [1.0, 0.0]])
+    stack = np.stack([square, 2 * square], -1)
+    expected = DistanceKernel(diagram_weights=[1.0, 2.0], combine="sum").fit_transform(stack)
+    for weights in (pd.Series([1.0, 2.0]), range(1, 3), np.array([1, 2])):
+        kernel = DistanceKernel(diagram_weights=weights, combine="sum")
+        np.testing.assert_array_equal(kernel.fit_transform(stack), expected)
+    for bad in ({1.0, 2.0}, {"a": 1.0, "b": 2.0}, pd.Series(["1", "2"])):
+        with pytest.raises(ValueError, match="'diagram_weights' parameter"):
+            DistanceKernel(diagram_weights=bad, combine="sum").fit_transform(stack)

@@ -61,9 +61,8 @@ def retrieval_scores(D, y) -> dict[str, float]:
     if n < 2:
         raise ValueError(f"D has {n} samples: at least two are needed to query one another")
     if y.dtype == object:  # classes must sort: a None or a mixture of kinds does not
-        try:
-            y = np.asarray(y.tolist())
-            np.unique(y)
+        try:  # (the values themselves: as strings, 1 and "1" would be one class)
+            sorted(set(y.tolist()))
         except TypeError as error:
             raise ValueError(f"y must hold classes of one sortable kind: {error}") from error
     if np.isnan(D).any():

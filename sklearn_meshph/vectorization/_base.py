@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from collections.abc import Mapping
 from numbers import Real
 
 import numpy as np
@@ -62,6 +63,12 @@ class _PerPosition:
 
     def __call__(self, value) -> bool:
         # Real numbers only: "1" and True were read as 1.0 by a conversion to floats.
+        # Other sequences (a range, a pandas Series) as the array of their numbers.
+        if not isinstance(value, tuple | list | np.ndarray | str | bytes | Mapping):
+            try:
+                value = np.asarray(value)
+            except (TypeError, ValueError):
+                return False
         return Numbers()(value) and len(value) > 0
 
     def __str__(self) -> str:
