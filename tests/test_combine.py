@@ -292,3 +292,19 @@ def test_a_part_of_weight_0_is_neither_fitted_nor_computed():
     assert index.kneighbors(list(F[:1]))[1].shape == (1, 2)
     nothing = CombinedDistance(parts, weights=[0, 0]).fit_transform(F)
     np.testing.assert_array_equal(nothing, np.zeros((4, 4)))
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e200, 1e300])
+@pytest.mark.parametrize("metric", ["euclidean", "sqeuclidean", "cosine"])
+def test_feature_distances_hold_at_any_scale_float64_holds(metric, scale):
+    """Cosine distances of rows near 1e200 or 1e-200 were 1 from themselves (their norms
+    overflowed or vanished); Euclidean ones were refused as overflowing."""
+    from scipy.spatial.distance import cdist
+
+    F = np.random.default_rng(0).random((6, 3))
+    if metric == "sqeuclidean" and scale > 1:
+        scale = 1e150  # its values are the squares: they must fit float64 themselves
+    expected = cdist(F, F, metric) * (scale**2 if metric == "sqeuclidean" else 1)
+    expected *= scale if metric == "euclidean" else 1
+    got = FeatureDistance(metric).fit_transform(F * scale)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15 * expected.max())
