@@ -4,8 +4,8 @@
 (NumPy, SciPy, scikit-learn, numba: 2 to 4 s) before :func:`sklearn_meshph.cli.main`
 can catch anything. Imported first by the package, this module installs a
 ``sys.excepthook`` that reports an uncaught ``KeyboardInterrupt`` as ``interrupted``,
-only when the package is being run as the main job (``sys.argv[0]`` is ``-m`` while
-``python -m`` locates the package, or the script's name); Python still ends the
+only when the package is being run as the main job (``python -m sklearn_meshph``, as
+the interpreter's own command line says, or the script's name); Python still ends the
 process as interrupted (status 130 from a shell). A library import changes nothing.
 """
 
@@ -31,8 +31,13 @@ def _quiet(kind, value, traceback, _default=sys.excepthook):
 
 
 def _run_as_main_job() -> bool:
+    """Whether the command line runs this package: ``-m sklearn_meshph`` (not another
+    module run with ``-m`` that imports it), or the script."""
     first = sys.argv[0] if sys.argv else ""
-    return first == "-m" or os.path.basename(first) in (SCRIPT, f"{SCRIPT}.exe")
+    if first == "-m":
+        command = list(getattr(sys, "orig_argv", []))
+        return "-m" in command[:-1] and command[command.index("-m") + 1] == __package__
+    return os.path.basename(first) in (SCRIPT, f"{SCRIPT}.exe")
 
 
 if _run_as_main_job() and sys.excepthook is sys.__excepthook__:

@@ -683,7 +683,7 @@ def test_a_disk_that_fills_at_the_pictures_keeps_the_data_files(tmp_path, monkey
     assert len(modes) == 1, modes
 
 
-@pytest.mark.parametrize("argv0", ["-m", "/somewhere/bin/sklearn-meshph", "library.py"])
+@pytest.mark.parametrize("argv0", ["/somewhere/bin/sklearn-meshph", "library.py"])
 def test_ctrl_c_while_the_package_is_imported_is_one_line(argv0):
     """The package's imports take seconds before main() can catch anything: Ctrl-C
     then printed a traceback of wherever the import was. Run as the main job, an
@@ -719,3 +719,17 @@ def test_ctrl_c_at_the_start_of_the_main_job_is_one_line(tmp_path):
     _, stderr = process.communicate(timeout=300)
     assert process.returncode in (-signal.SIGINT, 130), stderr
     assert stderr.decode().endswith("interrupted\n") and b"Traceback" not in stderr
+
+
+def test_another_module_run_with_dash_m_keeps_its_tracebacks(tmp_path):
+    """A package run with ``python -m`` that imports this one: ``sys.argv[0]`` is also
+    ``-m`` then, and its Ctrl-C lost its traceback."""
+    package = tmp_path / "other_tool"
+    package.mkdir()
+    (package / "__init__.py").write_text("import sklearn_meshph\n")
+    (package / "__main__.py").write_text("raise KeyboardInterrupt\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), *sys.path]))
+    process = subprocess.run(
+        [sys.executable, "-m", "other_tool"], capture_output=True, timeout=300, env=env
+    )
+    assert "Traceback" in process.stderr.decode() and "KeyboardInterrupt" in process.stderr.decode()

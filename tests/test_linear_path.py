@@ -138,3 +138,12 @@ def test_the_scaler_refuses_uneven_blocks_and_names_a_bad_sample():
     tiny = DistanceScaler().fit([[0.0], [1e-10]])
     with pytest.raises(ValueError, match="sample 1: its features divided by the fitted"):
         tiny.transform([[1.0], [1e300]])
+
+
+def test_a_constant_block_is_divided_by_1_whatever_the_rounding_of_its_mean():
+    """Constant 0.1: the variance came out 4e-34 from rounding, the scale 2.8e-17, and
+    the scaled rows 3.6e15."""
+    X = np.hstack([np.full((5, 2), 0.1), np.arange(10.0).reshape(5, 2)])
+    scaler = DistanceScaler(n_blocks=2).fit(X)
+    assert scaler.scales_[0] == 1.0
+    np.testing.assert_array_equal(scaler.transform(X)[:, :2], 0.1 / np.sqrt(2))

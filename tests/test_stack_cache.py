@@ -260,3 +260,14 @@ def test_a_cache_folder_that_is_not_a_folder_degrades_to_computing(tmp_path, kin
     with pytest.warns(CacheWarning, match="cannot be written"):
         result = PerDiagramDistance(memory=tmp_path).fit_transform(X)
     assert np.array_equal(result, PerDiagramDistance().fit_transform(X))
+
+
+def test_an_empty_stack_is_stored_and_read(tmp_path):
+    """A stack with a zero in its shape: the view cast raised TypeError, leaving a
+    temporary file behind (no estimator asks for one today: the cache alone)."""
+    from sklearn_meshph.diagrams.stack_cache import StackCache
+
+    cache = StackCache(tmp_path)
+    stored = cache.stack("0" * 64, (0, 4, 2), np.float64, lambda: np.empty((0, 4, 2)))
+    assert stored.shape == cache.load("0" * 64, (0, 4, 2), np.float64).shape == (0, 4, 2)
+    assert [p.suffix for p in (cache.folder).iterdir()] == [".npy"]

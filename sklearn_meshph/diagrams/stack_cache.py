@@ -151,7 +151,8 @@ def _digest(key: str, stack: np.ndarray) -> bytes:
     """The SHA-256 of the key and the stack's data: what an entry ends with (another
     entry's file renamed to this key, a bit flipped on disk, do not match)."""
     digest = hashlib.sha256(key.encode())
-    digest.update(memoryview(np.ascontiguousarray(stack)).cast("B"))
+    if stack.size:  # (a view of an empty array has no bytes to cast)
+        digest.update(memoryview(np.ascontiguousarray(stack)).cast("B"))
     return digest.digest()
 
 
@@ -170,7 +171,7 @@ def _read(entry: Path, key: str, shape: tuple, dtype: np.dtype) -> np.ndarray:
         if found != dtype or fortran or found_shape != shape:
             raise ValueError(f"dtype {found}, shape {found_shape}, not {dtype}, {shape}")
         stack = np.empty(shape, dtype)
-        if stream.readinto(memoryview(stack).cast("B")) != stack.nbytes:
+        if stack.size and stream.readinto(memoryview(stack).cast("B")) != stack.nbytes:
             raise ValueError("the file is cut short")
         trailer = stream.read(_DIGEST_SIZE + 1)
     if trailer != _digest(key, stack):

@@ -42,7 +42,10 @@ def _block_scales(X: np.ndarray, n_blocks: int) -> np.ndarray:
                 f"block {b}: the root-mean-square distance between the fitted samples "
                 "exceeds float64; rescale the features"
             )
-    return np.where(scales > 0, scales, 1.0)
+    # A block whose rows are all equal has no variance, whatever the rounding of its
+    # mean makes of it (constant 0.1 gave 2.8e-17, and rows 3.6e15 after the scaling).
+    constant = (blocks == blocks[:1]).all(axis=(0, 2))
+    return np.where((scales > 0) & ~constant, scales, 1.0)
 
 
 #: Scales below this are computed again on the rescaled block (the variance, their
