@@ -9,15 +9,13 @@ from numbers import Real
 
 import numpy as np
 from scipy.sparse import issparse
-from scipy.spatial.distance import cdist
 from sklearn.base import BaseEstimator, ClassNamePrefixFeaturesOutMixin, TransformerMixin, clone
-from sklearn.metrics import pairwise_distances
 from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import normalize
 from sklearn.utils import get_tags
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import median_scale
+from ._feature_distances import feature_distances
 from ._param_validation import N_JOBS, Interval, Options, check_params
 from .diagrams.pairwise import PairwiseTransformer, fit_transform_plan, run_plans, transform_plan
 from .persistence import LowerStarPersistence
@@ -140,41 +138,6 @@ def _plans(parts, X, fit: bool) -> list:
         else _part_plan(part, X, fit)
         for position, part in enumerate(parts)
     ]
-
-
-#: scikit-learn's metrics computed through products of matrices: a pair's value then
-#: depends on the other rows computed with it (a sample's distance to itself 0 in one
-#: batch, 1.7e-7 in another). They are computed pair by pair here.
-_PER_PAIR = {"euclidean": "euclidean", "l2": "euclidean", "sqeuclidean": "sqeuclidean"}
-
-
-def _power_of_two(values) -> np.ndarray:
-    """The power of two at or above each magnitude (1 for 0): dividing by it is exact."""
-    exponent = np.frexp(np.asarray(values, dtype=np.float64))[1]
-    return np.ldexp(1.0, np.where(np.asarray(values) > 0, exponent, 0))
-
-
-def feature_distances(X, Y, metric, n_jobs=None) -> np.ndarray:
-    """:func:`sklearn.metrics.pairwise_distances` of the rows of ``X`` and ``Y``, each
-    pair's value independent of the other rows (the Euclidean distances by scipy, the
-    cosine distances from each pair's own dot product of the normalized rows), at any
-    scale float64 holds: the rows are divided by powers of two first (exact), so that
-    squares and norms of features near 1e200 or 1e-200 neither overflow nor vanish."""
-    if isinstance(metric, str) and metric in _PER_PAIR:
-        top = max(np.abs(X).max(initial=0.0), np.abs(Y).max(initial=0.0))
-        scale = float(_power_of_two(top))
-        distances = cdist(X / scale, Y / scale, _PER_PAIR[metric])
-        with np.errstate(over="ignore"):
-            return distances * (scale * scale if metric == "sqeuclidean" else scale)
-    if isinstance(metric, str) and metric == "cosine":
-
-        def unit(rows):
-            rows = rows / _power_of_two(np.abs(rows).max(axis=1, initial=0.0))[:, None]
-            return normalize(rows)
-
-        similarity = np.einsum("id,jd->ij", unit(X), unit(Y))
-        return np.clip(1.0 - similarity, 0.0, 2.0)
-    return pairwise_distances(X, Y, metric=metric, n_jobs=n_jobs)
 
 
 class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
@@ -395,8 +358,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     >>> import numpy as np
     >>> from sklearn.preprocessing import FunctionTransformer
     >>> from sklearn_meshph import CombinedDistance
-    >>> from scipy.spatial.distance import cdist
-    >>> X = np.array([[0.0], [1.0], [3.0]])
+    >>>     >>> X = np.array([[0.0], [1.0], [3.0]])
     >>> absolute = FunctionTransformer(lambda A: cdist(A, X, "cityblock"))
     >>> combined = CombinedDistance([("a", absolute), ("b", absolute)], weights={"b": 3})
     >>> combined.fit_transform(X)  # (1 + 3) * |x - y| / median(1, 2, 3)

@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[1] / "sklearn_meshph"
 # top-level module; the package's own __init__ re-exports everything and is exempt.
 LAYERS = (
     ("_param_validation", "_registry", "_threads", "_progress", "_base", "_version"),
+    ("_feature_distances", "_interrupt"),
     ("mesh",),
     ("pointcloud",),
     ("graph",),

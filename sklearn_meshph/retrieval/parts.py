@@ -32,7 +32,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from ..combine import FeatureDistance, feature_distances
+from .._feature_distances import feature_distances
+from ..combine import FeatureDistance
 from ..diagrams import DiagramDistance
 from ..diagrams.distances import kernel_metric
 from ..diagrams.pairwise import as_packed, pack_for_metric, pair_distances
