@@ -358,7 +358,8 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
     >>> import numpy as np
     >>> from sklearn.preprocessing import FunctionTransformer
     >>> from sklearn_meshph import CombinedDistance
-    >>>     >>> X = np.array([[0.0], [1.0], [3.0]])
+    >>> from scipy.spatial.distance import cdist
+    >>> X = np.array([[0.0], [1.0], [3.0]])
     >>> absolute = FunctionTransformer(lambda A: cdist(A, X, "cityblock"))
     >>> combined = CombinedDistance([("a", absolute), ("b", absolute)], weights={"b": 3})
     >>> combined.fit_transform(X)  # (1 + 3) * |x - y| / median(1, 2, 3)

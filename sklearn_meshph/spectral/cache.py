@@ -166,7 +166,6 @@ _SAFE_REMOVAL = hasattr(os, "O_DIRECTORY") and {
     os.stat,
     os.unlink,
     os.rmdir,
-    os.chmod,
 }.issubset(os.supports_dir_fd)
 
 
