@@ -271,3 +271,27 @@ def test_an_empty_stack_is_stored_and_read(tmp_path):
     stored = cache.stack("0" * 64, (0, 4, 2), np.float64, lambda: np.empty((0, 4, 2)))
     assert stored.shape == cache.load("0" * 64, (0, 4, 2), np.float64).shape == (0, 4, 2)
     assert [p.suffix for p in (cache.folder).iterdir()] == [".npy"]
+
+
+def test_a_cache_folder_made_a_link_is_never_swept(tmp_path):
+    """Whoever can write the memory location made ``sklearn_meshph_distances`` a link
+    to the user's home: the sweep of old temporary files followed it and deleted the
+    user's own ``.*.tmp`` files and folders there."""
+    from sklearn_meshph.diagrams.stack_cache import StackCache
+    from sklearn_meshph.spectral.cache import EigenCache, remove_path, sweep_orphans
+
+    home = tmp_path / "home"
+    home.mkdir()
+    (home / ".notes.tmp").write_text("the user's")
+    (home / ".cfg.tmp").mkdir()
+    (home / ".cfg.tmp" / "f").write_text("the user's")
+    old = 10 * 3600
+    for path in (home / ".notes.tmp", home / ".cfg.tmp"):
+        os.utime(path, (path.stat().st_atime - old, path.stat().st_mtime - old))
+    for name in ("sklearn_meshph_distances", "sklearn_meshph_eigen"):
+        (tmp_path / name).symlink_to(home)
+    StackCache(tmp_path).store("0" * 64, np.zeros((2, 2)))
+    sweep_orphans(EigenCache(tmp_path).folder)  # what the eigen cache's stores do
+    remove_path(tmp_path / "sklearn_meshph_eigen" / ".notes.tmp")
+    assert (home / ".notes.tmp").read_text() == "the user's"
+    assert (home / ".cfg.tmp" / "f").read_text() == "the user's"

@@ -171,8 +171,9 @@ _SAFE_REMOVAL = hasattr(os, "O_DIRECTORY") and {
 
 def remove_path(path) -> None:
     """Remove whatever is at ``path`` (a file, a link, a FIFO, a folder and what it
-    holds), if anything, never following a link: each folder is opened relative to its
-    parent's descriptor, without following links, and checked to be the one looked at.
+    holds), if anything, never following a link (nor a link in place of the folder
+    holding it): each folder is opened relative to its parent's descriptor, without
+    following links, and checked to be the one looked at.
     A folder its owner may not write (an entry copied read-only) is given the owner's
     permissions first. Folders nested more than 16 levels deep are left."""
     path = Path(path)
@@ -185,8 +186,8 @@ def remove_path(path) -> None:
         except (OSError, RecursionError):
             pass
         return
-    try:
-        parent = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+    try:  # the folder holding it is not followed either (a cache folder made a link)
+        parent = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
     except OSError:
         return
     try:
@@ -322,6 +323,11 @@ def sweep_orphans(folder: Path) -> None:
     a cache folder, once they are older than an hour (a writer at work keeps its own).
     Links are removed, never followed."""
     now = time.time()
+    try:  # a cache folder that is a link: someone else's files, never swept
+        if not stat.S_ISDIR(os.lstat(folder).st_mode):
+            return
+    except OSError:
+        return
     for path in folder.glob(".*.tmp"):
         try:
             if now - path.lstat().st_mtime > _STALE_TEMPORARY:
