@@ -308,3 +308,18 @@ def test_feature_distances_hold_at_any_scale_float64_holds(metric, scale):
     expected *= scale if metric == "euclidean" else 1
     got = FeatureDistance(metric).fit_transform(F * scale)
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15 * expected.max())
+
+
+def test_feature_distances_of_rows_near_the_largest_float():
+    """Rows at 1e308: the power of two above them, 2**1024, was inf, the rows divided
+    by it 0 and the distances NaN; cosine distances all 1. Equal rows of squares past
+    float64 gave NaN (0 times inf), not 0."""
+    rows = [[1e308, 0.0], [0.0, 0.0], [5e307, 1.0]]
+    euclidean = FeatureDistance("euclidean").fit_transform(rows)
+    np.testing.assert_allclose(euclidean[0], [0.0, 1e308, 5e307])
+    cosine = FeatureDistance("cosine").fit_transform([[1e308, 0.0], [0.0, 1.0], [5e307, 1.0]])
+    np.testing.assert_allclose(cosine, [[0, 1, 0], [1, 0, 1], [0, 1, 0]], atol=1e-12)
+    with pytest.raises(ValueError, match="sqeuclidean distance to fitted sample 2 is beyond"):
+        FeatureDistance("sqeuclidean").fit_transform([[1e160], [1e160], [0.0]])
+    with pytest.raises(ValueError, match="euclidean distance to fitted sample 1 is beyond"):
+        FeatureDistance("euclidean").fit_transform([[1.7e308, 0.0], [-1.7e308, 0.0]])
