@@ -423,16 +423,24 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
             ]
         return super().set_params(**params)
 
+    def _first_fitted(self):
+        """The first part of positive weight (the others are not fitted)."""
+        used = [part for name, part in self.parts_ if self.weights_[name] > 0]
+        if not used:
+            raise AttributeError("no part of positive weight was fitted")
+        return used[0]
+
     @property
     def n_features_in_(self):
-        """The number of features of the fitted samples, as the first part saw them
-        (when it counts them)."""
-        return self.parts_[0][1].n_features_in_
+        """The number of features of the fitted samples, as the first part of positive
+        weight saw them (when it counts them)."""
+        return self._first_fitted().n_features_in_
 
     @property
     def feature_names_in_(self):
-        """The columns of the fitted DataFrame, as the first part saw them."""
-        return self.parts_[0][1].feature_names_in_
+        """The columns of the fitted DataFrame, as the first part of positive weight
+        saw them."""
+        return self._first_fitted().feature_names_in_
 
     def _fitted_weights(self) -> dict:
         """The weight of each part by name, checked against the parts."""

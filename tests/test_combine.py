@@ -292,6 +292,14 @@ def test_a_part_of_weight_0_is_neither_fitted_nor_computed():
     assert index.kneighbors(list(F[:1]))[1].shape == (1, 2)
     nothing = CombinedDistance(parts, weights=[0, 0]).fit_transform(F)
     np.testing.assert_array_equal(nothing, np.zeros((4, 4)))
+    with pytest.raises(ValueError, match="weights are all 0: it ranks nothing"):
+        ShapeNeighbors(CombinedDistance(parts, weights=[0, 0]), n_neighbors=2).fit(list(F))
+    # The fitted features are counted by the first part of positive weight.
+    import pandas as pd
+
+    frame = pd.DataFrame(F, columns=["x", "y", "z"])
+    fitted = CombinedDistance(parts[::-1], weights=[0, 1]).fit(frame)
+    assert fitted.n_features_in_ == 3 and list(fitted.feature_names_in_) == ["x", "y", "z"]
 
 
 @pytest.mark.parametrize("scale", [1e-200, 1e200, 1e300])

@@ -335,6 +335,8 @@ def test_retrieval_scores_refuse_what_they_cannot_score():
         retrieval_scores(np.zeros((4, 4)), [0, None, 0, None])
     with pytest.raises(ValueError, match="y must hold classes of one sortable kind"):
         retrieval_scores(np.zeros((4, 4)), np.array([1, "1", 2, 2], dtype=object))
+    with pytest.raises(ValueError, match="y must hold classes of one sortable kind"):
+        retrieval_scores(np.zeros((4, 4)), [1, "1", 1, "1"])  # a list: one class of strings
     with pytest.raises(TypeError, match="got a sparse one: pass D.toarray"):
         retrieval_scores(sp.csr_matrix(np.ones((2, 2))), [0, 0])
     with pytest.raises(ValueError, match="D must be a square matrix of numbers"):

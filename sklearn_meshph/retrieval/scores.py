@@ -52,19 +52,20 @@ def retrieval_scores(D, y) -> dict[str, float]:
         D = np.asarray(D, dtype=float)
     except (TypeError, ValueError) as error:
         raise ValueError(f"D must be a square matrix of numbers: {error}") from error
-    y = np.asarray(y)
+    given, y = y, np.asarray(y)
     if D.ndim != 2 or D.shape[0] != D.shape[1]:
         raise ValueError(f"D must be a square distance matrix, got shape {D.shape}")
     n = len(D)
     if y.shape != (n,):
         raise ValueError(f"y must hold one class per row of D ({n}), got shape {y.shape}")
+    # Classes must sort: a None or a mixture of kinds does not (the values themselves:
+    # as strings, 1 and "1" would be one class).
+    try:
+        sorted(set(given.tolist() if isinstance(given, np.ndarray) else list(given)))
+    except TypeError as error:
+        raise ValueError(f"y must hold classes of one sortable kind: {error}") from error
     if n < 2:
         raise ValueError(f"D has {n} samples: at least two are needed to query one another")
-    if y.dtype == object:  # classes must sort: a None or a mixture of kinds does not
-        try:  # (the values themselves: as strings, 1 and "1" would be one class)
-            sorted(set(y.tolist()))
-        except TypeError as error:
-            raise ValueError(f"y must hold classes of one sortable kind: {error}") from error
     if np.isnan(D).any():
         row = int(np.argwhere(np.isnan(D))[0, 0])
         raise ValueError(f"sample {row}: D holds NaN distances")
