@@ -35,9 +35,32 @@ def _run_as_main_job() -> bool:
     module run with ``-m`` that imports it), or the script."""
     first = sys.argv[0] if sys.argv else ""
     if first == "-m":
-        command = list(getattr(sys, "orig_argv", []))
-        return "-m" in command[:-1] and command[command.index("-m") + 1] == __package__
+        return _module_run(list(getattr(sys, "orig_argv", []))[1:]) == __package__
     return os.path.basename(first) in (SCRIPT, f"{SCRIPT}.exe")
+
+
+def _module_run(options: list) -> str | None:
+    """The module of the interpreter's ``-m`` among its ``options``: ``-m name``,
+    ``-Im name``, ``-mname``... (letters before ``m`` are flags; ``-W``, ``-X`` and
+    ``-c`` take an argument, glued or next, and ``-c`` or a script ends the options)."""
+    position = 0
+    while position < len(options):
+        option = options[position]
+        if option == "--" or not option.startswith("-") or option.startswith("--"):
+            return None  # the end of the options, a script, or a long option
+        for k, letter in enumerate(option[1:], start=1):
+            if letter in "mcWX":
+                rest = option[k + 1 :]
+                if not rest:
+                    position += 1
+                    rest = options[position] if position < len(options) else ""
+                if letter == "m":
+                    return rest
+                if letter == "c":
+                    return None
+                break
+        position += 1
+    return None
 
 
 if _run_as_main_job() and sys.excepthook is sys.__excepthook__:

@@ -733,3 +733,21 @@ def test_another_module_run_with_dash_m_keeps_its_tracebacks(tmp_path):
         [sys.executable, "-m", "other_tool"], capture_output=True, timeout=300, env=env
     )
     assert "Traceback" in process.stderr.decode() and "KeyboardInterrupt" in process.stderr.decode()
+
+
+@pytest.mark.parametrize(
+    ("options", "module"),
+    [
+        (["-m", "sklearn_meshph", "--help"], "sklearn_meshph"),
+        (["-Im", "sklearn_meshph"], "sklearn_meshph"),  # combined flags: the hook was missed
+        (["-msklearn_meshph"], "sklearn_meshph"),
+        (["-X", "dev", "-Wignore::ImportWarning", "-m", "sklearn_meshph"], "sklearn_meshph"),
+        (["-m", "pdb", "-m", "sklearn_meshph"], "pdb"),
+        (["-c", "import sklearn_meshph", "-m", "x"], None),
+        (["script.py", "-m", "sklearn_meshph"], None),
+    ],
+)
+def test_the_module_run_is_read_from_the_interpreters_options(options, module):
+    from sklearn_meshph._interrupt import _module_run
+
+    assert _module_run(options) == module
