@@ -1,5 +1,6 @@
 import os
 import pickle
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -92,8 +93,6 @@ def remove_nested(folder):
         os.rename(folder / "d" / "d", folder / "lifted")
         os.rmdir(folder / "d")
         os.rename(folder / "lifted", folder / "d")
-    import shutil
-
     shutil.rmtree(folder)
 
 

@@ -279,8 +279,9 @@ def resolve_range(given, learned, name: str) -> tuple[float, float]:
     return lo, hi
 
 
-def check_finite_output(values: np.ndarray, what: str) -> np.ndarray:
-    """``values`` (one row per sample), refused if an entry overflowed or is NaN."""
+def check_finite_output(values: np.ndarray, what: str, dtype=None) -> np.ndarray:
+    """``values`` (one row per sample), refused if an entry overflowed or is NaN; in
+    ``dtype`` when given (refused where a value does not fit it: :func:`cast_output`)."""
     bad = ~np.isfinite(values)
     if bad.any():
         i = int(np.flatnonzero(bad.any(axis=1))[0])
@@ -288,7 +289,7 @@ def check_finite_output(values: np.ndarray, what: str) -> np.ndarray:
             f"sample {i}: its {what} overflow float64; rescale the diagrams (or the "
             "bandwidth, or the weights)"
         )
-    return values
+    return values if dtype is None else cast_output(values, dtype, what)
 
 
 class PolicyTransformer(DiagramTransformer):
@@ -407,8 +408,7 @@ class PackedVectorizer(PolicyTransformer):
         else:
             parts = (packed.block(a, b) for a, b in blocks)
             rows = map_samples(self._block_rows, parts, n_jobs=self.n_jobs, prefer="threads")
-        values = check_finite_output(np.vstack(rows), self._output_name)
-        return cast_output(values, self.dtype, self._output_name)
+        return check_finite_output(np.vstack(rows), self._output_name, self.dtype)
 
     def _block_rows(self, packed: Packed) -> np.ndarray:
         columns = [self._compute(k, packed, *packed.position(k)) for k in range(packed.n_diagrams)]

@@ -16,7 +16,6 @@ from numbers import Integral
 import numba
 import numpy as np
 
-from .._base import cast_output
 from .._param_validation import Interval, Options
 from ..diagrams.distances import MAX_DIRECTIONS
 from ..diagrams.pairwise import (
@@ -110,9 +109,7 @@ class _DiagramKernel(PolicyTransformer, PairwiseTransformer):
             diagonal=None,
             desc="kernel",
         )
-        return cast_output(
-            check_finite_output(matrix, "kernel values"), self.dtype, "kernel values"
-        )
+        return check_finite_output(matrix, "kernel values", self.dtype)
 
 
 def _combined_pairs(left, right, rows, cols, function, n_parts, bandwidths, weights, combine):

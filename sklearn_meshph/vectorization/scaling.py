@@ -24,6 +24,11 @@ def _finite_rows(X: np.ndarray) -> np.ndarray:
     return X
 
 
+#: Scales below this are computed again on the rescaled block (the variance, their
+#: square, is then near or in float64's subnormals).
+_SMALL_SCALE = float(np.sqrt(np.finfo(np.float64).tiny)) * 2**26
+
+
 def _block_scales(X: np.ndarray, n_blocks: int) -> np.ndarray:
     """``sqrt(2 * total variance)`` of each block of columns (1 for a block without
     variance). Where the variance overflows or underflows (features near 1e308 or
@@ -46,11 +51,6 @@ def _block_scales(X: np.ndarray, n_blocks: int) -> np.ndarray:
     # mean makes of it (constant 0.1 gave 2.8e-17, and rows 3.6e15 after the scaling).
     constant = (blocks == blocks[:1]).all(axis=(0, 2))
     return np.where((scales > 0) & ~constant, scales, 1.0)
-
-
-#: Scales below this are computed again on the rescaled block (the variance, their
-#: square, is then near or in float64's subnormals).
-_SMALL_SCALE = float(np.sqrt(np.finfo(np.float64).tiny)) * 2**26
 
 
 class DistanceScaler(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
