@@ -2,6 +2,7 @@
 its kernels and C: the ways screened in docs/graphs.md ("What was tried").
 
     python benchmarks/graph_kernel_choices.py [--datasets MUTAG COX2] [--repeats 10]
+        [--strategies first|second]
 
 PersLay's protocol (10-fold shuffled cross-validation, seeds 0 to ``--repeats - 1``) on
 the stack of ``GraphPairDistances`` (computed once per dataset: a pair's distances
@@ -29,6 +30,19 @@ an SVM with a precomputed kernel, its kernels and C given by one of the strategi
 - ``GP mean``: the sign of that Gaussian process's posterior mean (kernel ridge
   regression of the labels with the fitted weights and noise).
 
+``--strategies second`` runs another set instead (each from the same internal folds'
+out-of-fold decision values, so nothing more is fitted on the test graphs):
+
+- ``choice, stratified 5``, ``5 x 3``, ``10``: the choice from stratified internal
+  folds (three seeds of 5 folds pooled; 10 folds);
+- ``aligned sum, C chosen``: the sum of largest centred kernel-target alignment with
+  the training labels, then its C by the internal folds (7 sums, then 3 values of C);
+- ``stacked, 21`` (also with a ten times larger penalty) and ``stacked at C=1``: a
+  logistic regression with non-negative weights on the candidates' out-of-fold
+  decision values (a super learner: a blend, not an argmax);
+- ``fixed ...``: each candidate's fixed score over the same outer folds, for diagnosis
+  only (choosing one of them would be choosing on the test folds).
+
 Everything is chosen on the training folds; a fixed strategy's score is what that fixed
 recipe would give. PersLay's published accuracy is printed beside (the anchor).
 """
@@ -43,7 +57,7 @@ from graph_classification import PERSLAY
 from joblib import Parallel, delayed
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.optimize import minimize
-from sklearn.model_selection import KFold
+from sklearn.model_selection import KFold, StratifiedKFold
 from sklearn.svm import SVC
 
 from sklearn_meshph import load_tu_dataset, make_graph_classifier
@@ -52,6 +66,11 @@ GROUPS = ("diagrams", "patterns", "features")
 SUMS = [w for w in itertools.product((0.0, 1.0), repeat=len(GROUPS)) if any(w)]
 CANDIDATES = [(w, c) for w in SUMS for c in (1.0, 10.0, 100.0)]
 ALL_THREE = (1.0, 1.0, 1.0)
+STACKINGS = [
+    ("stacked, 21", CANDIDATES, 1.0),
+    ("stacked, 21, penalty 10", CANDIDATES, 10.0),
+    ("stacked at C=1", [k for k in CANDIDATES if k[1] == 1.0], 1.0),
+]
 
 
 def group_kernels(stack, groups, train):
@@ -82,6 +101,43 @@ def internal_score(kernel, y, train, c, folds, hinge):
         else:
             scores.append(np.mean(model.predict(kernel[np.ix_(held, fit)]) == y[held]))
     return np.mean(scores)
+
+
+def out_of_fold(kernels, y, train, keys, splitter=None):
+    """The internal folds' decision values of each candidate on the graphs it did not
+    see, ``(len(train), len(keys))``, and its accuracy over those folds."""
+    splitter = splitter or KFold(5, shuffle=True, random_state=0)
+    folds = list(splitter.split(train, y[train]))
+    values = np.zeros((len(train), len(keys)))
+    hits = np.zeros((len(train), len(keys)), dtype=bool)
+    for inner_train, inner_test in folds:
+        fit, held = train[inner_train], train[inner_test]
+        for k, (w, c) in enumerate(keys):
+            kernel = kernels @ np.array(w)
+            model = svm(kernel, y, fit, c)
+            block = kernel[np.ix_(held, fit)]
+            values[inner_test, k] = model.decision_function(block)
+            hits[inner_test, k] = model.predict(block) == y[held]
+    return values, hits
+
+
+def stacking_weights(values, target, penalty):
+    """Non-negative weights and an intercept of a logistic regression of the +-1
+    ``target`` on the candidates' out-of-fold decision ``values`` (L2 ``penalty`` on
+    the weights): a convex-cone blend of the candidates, not an argmax over them."""
+
+    def loss(params):
+        w, b = params[:-1], params[-1]
+        margin = target * (values @ w + b)
+        value = np.sum(np.logaddexp(0.0, -margin)) + penalty * w @ w
+        slope = -target * 0.5 * (1.0 - np.tanh(0.5 * margin))  # -t sigmoid(-m)
+        gradient = np.r_[values.T @ slope + 2.0 * penalty * w, slope.sum()]
+        return value, gradient
+
+    start = np.r_[np.full(values.shape[1], 1.0 / values.shape[1]), 0.0]
+    bounds = [(0.0, None)] * values.shape[1] + [(None, None)]
+    result = minimize(loss, start, jac=True, method="L-BFGS-B", bounds=bounds)
+    return result.x[:-1], result.x[-1]
 
 
 def chosen(kernels, y, train, hinge):
@@ -163,15 +219,55 @@ def evidence_strategies(kernels, y, train, test):
     }
 
 
-def fold(stack, groups, y, train, test):
+def second_set(kernels, y, train, test, accuracy, decisions, spreads):
+    """The second set of strategies (``--strategies second``), each candidate's SVM on
+    all the training graphs already fitted (``accuracy``, ``decisions``): the choice
+    from stratified internal folds; the sum of largest centred alignment with the
+    labels, then C by the internal folds; stacked (``stacking_weights``); and every
+    candidate's fixed score, for diagnosis only."""
+    classes = np.unique(y[train])
+    target = np.where(y[train] == classes[1], 1.0, -1.0)
+    values, hits = out_of_fold(kernels, y, train, CANDIDATES)
+    result = {"choice": accuracy(*CANDIDATES[int(np.argmax(hits.mean(axis=0)))])}
+    for name, seeds, n_folds in (("5", [0], 5), ("5 x 3", [0, 1, 2], 5), ("10", [0], 10)):
+        rates = sum(
+            out_of_fold(
+                kernels,
+                y,
+                train,
+                CANDIDATES,
+                StratifiedKFold(n_folds, shuffle=True, random_state=s),
+            )[1].mean(axis=0)
+            for s in seeds
+        )
+        result[f"choice, stratified {name}"] = accuracy(*CANDIDATES[int(np.argmax(rates))])
+    centre = np.eye(len(train)) - 1.0 / len(train)
+    alignments = []
+    for w in SUMS:
+        centred = centre @ (kernels[np.ix_(train, train)] @ np.array(w)) @ centre
+        alignments.append(target @ centred @ target / np.linalg.norm(centred))
+    w = SUMS[int(np.argmax(alignments))]
+    rates = [hits[:, CANDIDATES.index((w, c))].mean() for c in (1.0, 10.0, 100.0)]
+    result["aligned sum, C chosen"] = accuracy(w, (1.0, 10.0, 100.0)[int(np.argmax(rates))])
+    for name, keys, penalty in STACKINGS:
+        columns = [CANDIDATES.index(k) for k in keys]
+        weights, intercept = stacking_weights(values[:, columns], target, penalty)
+        test_values = np.column_stack([decisions[k] * spreads[k] for k in keys])
+        labels = np.where(test_values @ weights + intercept > 0, classes[1], classes[0])
+        result[name] = np.mean(labels == y[test])
+    return {**result, **{f"fixed {w} C={c:g}": accuracy(w, c) for w, c in CANDIDATES}}
+
+
+def fold(stack, groups, y, train, test, strategies="first"):
     """The test accuracy of every strategy on one outer fold (each candidate's SVM
     fitted once on the training graphs)."""
     kernels = group_kernels(stack, groups, train)
-    decisions, predictions = {}, {}
+    decisions, predictions, spreads = {}, {}, {}
     for w, c in CANDIDATES:
         kernel = kernels @ np.array(w)
         model = svm(kernel, y, train, c)
         spread = np.std(model.decision_function(kernel[np.ix_(train, train)])) or 1.0
+        spreads[w, c] = spread
         decisions[w, c] = model.decision_function(kernel[np.ix_(test, train)]) / spread
         predictions[w, c] = model.predict(kernel[np.ix_(test, train)])
     classes = np.unique(y[train])
@@ -183,6 +279,8 @@ def fold(stack, groups, y, train, test):
         mean = np.mean([decisions[k] for k in keys], axis=0)
         return np.mean(np.where(mean > 0, classes[1], classes[0]) == y[test])
 
+    if strategies == "second":
+        return second_set(kernels, y, train, test, accuracy, decisions, spreads)
     return {
         "choice": accuracy(*chosen(kernels, y, train, hinge=False)),
         "choice by hinge": accuracy(*chosen(kernels, y, train, hinge=True)),
@@ -200,6 +298,12 @@ def main():
     parser.add_argument("--repeats", type=int, default=10)
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--data", default=str(DATA / "tu"), help="folder of the TU datasets")
+    parser.add_argument(
+        "--strategies",
+        choices=("first", "second"),
+        default="first",
+        help="which set of strategies (the module's docstring)",
+    )
     args = parser.parse_args()
     header = None
     for name in args.datasets:
@@ -219,7 +323,7 @@ def main():
             for split in KFold(10, shuffle=True, random_state=seed).split(y)
         ]
         results = Parallel(n_jobs=args.n_jobs)(
-            delayed(fold)(stack, groups, y, train, test) for train, test in splits
+            delayed(fold)(stack, groups, y, train, test, args.strategies) for train, test in splits
         )
         if header is None:
             header = list(results[0])
