@@ -209,6 +209,8 @@ def test_node_values_of_a_graph_are_checked():
         Graph(2, [[0, 1]], [1.0], node_values=[[0.0], [1.0], [2.0]])
     with pytest.raises(TypeError, match="node values must be numbers"):
         Graph(2, [[0, 1]], [1.0], node_values=["C", "O"])
+    with pytest.raises(ValueError, match="node values must be finite, got one beyond float64"):
+        Graph(2, [[0, 1]], [1.0], node_values=[10**400, 1])
 
 
 # Bad graphs, named -------------------------------------------------------------
@@ -249,6 +251,9 @@ def _one_sided():
         (lambda: (3, [[0, 1, 2]]), ValueError, r"\(m, 2\) integer array, got shape \(1, 3\)"),
         (lambda: (3, [0, 1]), ValueError, r"\(m, 2\) integer array, got shape \(2,\)"),
         (lambda: (3, [[0, 1], [2]]), ValueError, r"\(m, 2\) integer array"),
+        # empty, but not (0, 2): not "no edges"
+        (lambda: (3, np.empty((5, 0), int)), ValueError, r"got shape \(5, 0\)"),
+        (lambda: (3, np.empty((0, 3), int)), ValueError, r"got shape \(0, 3\)"),
     ],
 )
 def test_a_bad_graph_is_refused_naming_the_sample(sample, error, message):
@@ -277,6 +282,11 @@ def test_a_bad_networkx_graph_is_refused_naming_the_sample():
     missing = nx.Graph([(0, 1)])
     nx.set_node_attributes(missing, {0: np.nan, 1: 1.0}, "label")
     cases.append((missing, ValueError, "node 0 has a NaN"))
+    # Python ints beyond float64: refused as such, not a bare OverflowError
+    cases.append((nx.Graph([(0, 1, {"weight": 10**400})]), ValueError, "finite, got inf"))
+    huge = nx.Graph([(0, 1)])
+    nx.set_node_attributes(huge, {0: 10**400, 1: 2}, "label")
+    cases.append((huge, ValueError, "'label' values must be finite, got one beyond float64"))
     for sample, error, message in cases:
         with pytest.raises(error, match=f"^sample 3: .*{message}"):
             check_graph(sample, index=3)

@@ -68,7 +68,7 @@ def _edge_array(edges, place: str) -> np.ndarray:
         array = np.asarray(edges)
     except (ValueError, TypeError):
         raise ValueError(f"{place}: edges must be an (m, 2) integer array") from None
-    if array.size == 0:
+    if array.size == 0 and (array.ndim == 1 or array.shape == (0, 2)):  # [] or (0, 2)
         return np.empty((0, 2), dtype=np.int64)
     if array.ndim != 2 or array.shape[1] != 2:
         raise ValueError(f"{place}: edges must be an (m, 2) integer array, got shape {array.shape}")
@@ -82,6 +82,8 @@ def _check_node_values(values, n_nodes: int, place: str):
         return None
     try:
         values = np.asarray(values, dtype=np.float64)
+    except OverflowError:  # an int beyond float64
+        raise ValueError(f"{place}: node values must be finite, got one beyond float64") from None
     except (ValueError, TypeError):
         raise TypeError(f"{place}: node values must be numbers") from None
     if values.ndim == 1:
@@ -211,6 +213,8 @@ def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: st
 def _weight(value, place: str) -> float:
     try:
         weight = float(value)
+    except OverflowError:  # an int beyond float64
+        weight = np.inf
     except (ValueError, TypeError):
         raise TypeError(f"{place}: edge weight {value!r} is not a number") from None
     if not np.isfinite(weight) or weight < 0:
@@ -230,6 +234,10 @@ def _networkx_node_values(data: list[dict], place: str):
             raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
         try:
             column = np.array([d[key] for d in data], dtype=np.float64)
+        except OverflowError:  # an int beyond float64
+            raise ValueError(
+                f"{place}: node {key!r} values must be finite, got one beyond float64"
+            ) from None
         except (ValueError, TypeError):
             raise TypeError(
                 f"{place}: node {key!r} values must be numbers, as many on every node "
