@@ -170,10 +170,12 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
         out = np.empty((X.shape[0], X.shape[1], self.n_groups_))
         rows = max(1, _KERNEL_BLOCK // max(1, X.shape[1] * X.shape[2]))
         for start in range(0, X.shape[0], rows):
-            block = X[start : start + rows]
-            out[start : start + rows] = (
-                np.exp(block / (-2.0 * self.bandwidth**2 * self.scales_)) @ average
-            )
+            # d / m first, then / (2 bandwidth^2): the product 2 bandwidth^2 m underflows
+            # to 0 for a small bandwidth and small distances (0 / -0.0 is NaN). With the
+            # default bandwidth of 1 the two orders give the same bits (powers of two).
+            scaled = X[start : start + rows] / self.scales_
+            scaled /= -2.0 * self.bandwidth**2
+            out[start : start + rows] = np.exp(scaled, out=scaled) @ average
         return out
 
     def fit(self, X, y):
