@@ -2,6 +2,7 @@
 make_graph_classifier(classifier="kernels")."""
 
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -164,6 +165,16 @@ def test_pattern_distance_of_relabelled_and_different_graphs():
     assert patterns[0, 1] == pytest.approx(0.0, abs=1e-12)  # the same graph
     assert patterns[0, 2] > 0 and patterns[0, 3] == pytest.approx(2.0)  # no degree shared
     assert 0 < patterns[0, 2] < 2  # a path's inner nodes look like a cycle's
+
+
+def test_many_pattern_iterations_raise_no_overflow_warning():
+    # The salt of levels 9 and up wraps modulo 2^64 (as meant): it raised a
+    # RuntimeWarning, an error under -W error.
+    graphs = fields([cycle(7), path(7), star(7)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        deep = GraphPairDistances(wl_iterations=12).fit_transform(graphs)
+    assert np.isfinite(deep).all() and deep[0, 1, -3] > 0
 
 
 def separable_stack(n=40, seed=0):

@@ -31,12 +31,13 @@ __all__ = ["GraphPairDistances"]
 
 def _pattern_counts(field, iterations: int):
     """The distinct Weisfeiler-Lehman labels of a graph (iteration-salted) and counts."""
+    # The salt of a level wraps modulo 2^64 from level 9 on, as meant: taken in Python
+    # ints, so that no overflow warning is raised (an error under -W error).
     labels = [
-        level * np.uint64(2**61 - 1) + values
+        np.uint64(level * (2**61 - 1) % 2**64) + values
         for level, values in enumerate(wl_labels(field.edges, field.n_vertices, iterations))
     ]
-    with np.errstate(over="ignore"):
-        return np.unique(np.concatenate(labels), return_counts=True)
+    return np.unique(np.concatenate(labels), return_counts=True)
 
 
 def _log_scaled(features: np.ndarray) -> np.ndarray:
