@@ -102,6 +102,32 @@ def test_a_fifo_or_a_folder_in_place_of_a_tu_file_is_named_and_never_read(tmp_pa
     (tmp_path / "TINY_graph_labels.txt").mkdir()
     with pytest.raises(ValueError, match=r"TINY_graph_labels.txt' .*is not a regular file"):
         load_tu_dataset(tmp_path)
+    # The optional files too: a FIFO under their name is not their absence.
+    (tmp_path / "TINY_graph_labels.txt").rmdir()
+    write_tu(tmp_path, {"graph_labels": TINY["graph_labels"]})
+    os.mkfifo(tmp_path / "TINY_node_attributes.txt.gz")
+    with pytest.raises(ValueError, match=r"node_attributes.txt.gz' is not a regular file"):
+        load_tu_dataset(tmp_path)
+
+
+def test_more_graphs_than_the_limit_are_refused_before_they_are_built(tmp_path, monkeypatch):
+    folder = write_tu(tmp_path, TINY)
+    monkeypatch.setattr(reading, "MAX_TU_GRAPHS", 2)
+    with pytest.raises(ValueError, match=r"graph_indicator.txt' holds 3 graphs, more than 2"):
+        load_tu_dataset(folder)
+
+
+def test_a_byte_order_mark_bytes_paths_and_decompression_errors(tmp_path):
+    folder = write_tu(tmp_path / "bom", TINY)
+    for part in ("A", "graph_labels"):
+        path = folder / f"TINY_{part}.txt"
+        path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    _check_tiny(*load_tu_dataset(os.fsencode(folder)))
+    assert tu_dataset_names(os.fsencode(folder)) == ["TINY"]
+    (folder / "TINY_A.txt").unlink()
+    (folder / "TINY_A.txt.gz").write_bytes(b"not gzip at all")
+    with pytest.raises(ValueError, match=r"not valid .gz data, so not a valid TU file$"):
+        load_tu_dataset(folder)
 
 
 BAD_FILES = [

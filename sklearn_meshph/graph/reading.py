@@ -30,13 +30,24 @@ import numpy as np
 from ..mesh.reading import COMPRESSIONS, decompress, split_compression
 from .validation import Graph
 
-__all__ = ["MAX_TU_FILE_SIZE", "MAX_TU_LINE", "load_tu_dataset", "tu_dataset_names"]
+__all__ = [
+    "MAX_TU_FILE_SIZE",
+    "MAX_TU_GRAPHS",
+    "MAX_TU_LINE",
+    "load_tu_dataset",
+    "tu_dataset_names",
+]
 
 #: Largest size of one file of a TU dataset, in bytes (512 MiB, as for point-cloud text),
 #: decompressed. Loading peaks near 9 times the edge file's size for its shortest lines
 #: ("1, 2": 16 bytes of pairs per 5 of text, and the text itself): 0.9 GB for 100 MB,
 #: so about 4.5 GB for a file at the limit.
 MAX_TU_FILE_SIZE = 512 * 1024**2
+#: Most graphs of a TU dataset (a million: the largest of the collection has about
+#: 200,000). A graph costs one short line of each of two files but about 600 bytes
+#: loaded: 60 million one-node graphs fit in files at MAX_TU_FILE_SIZE, and 15 MB of
+#: them compressed would have taken 36 GB.
+MAX_TU_GRAPHS = 1_000_000
 
 _ENDINGS = ("", *COMPRESSIONS)
 _INT64 = np.iinfo(np.int64)
@@ -56,7 +67,7 @@ def tu_dataset_names(folder) -> list[str]:
     """The names ``DS`` of the TU datasets in ``folder`` (those with a ``DS_A.txt`` and
     a ``DS_graph_indicator.txt``, plain or compressed), sorted; empty for any other
     folder or a path that is not a folder."""
-    folder = os.fspath(folder)
+    folder = os.fsdecode(os.fspath(folder))
     if not os.path.isdir(folder):
         return []
     pattern = re.compile(r"(.+)_A\.txt(" + "|".join(map(re.escape, COMPRESSIONS)) + r")?")
@@ -69,14 +80,21 @@ def _content(path: str, place: str) -> bytes:
     if compression is not None:
         if os.path.getsize(path) == 0:  # Python reads an empty .gz or .bz2 as no data
             raise ValueError(f"{place}: TU file {path!r} is empty, not valid {compression} data")
-        return decompress(path, compression, place, MAX_TU_FILE_SIZE, "TU file").getvalue()
+        return _without_bom(
+            decompress(path, compression, place, MAX_TU_FILE_SIZE, "TU file").getvalue()
+        )
     if os.path.getsize(path) > MAX_TU_FILE_SIZE:
         raise ValueError(
             f"{place}: TU file {path!r} is larger than {MAX_TU_FILE_SIZE} bytes "
             "(the limit, MAX_TU_FILE_SIZE); refusing to read it"
         )
     with open(path, "rb") as stream:
-        return stream.read()
+        return _without_bom(stream.read())
+
+
+def _without_bom(content: bytes) -> bytes:
+    """``content`` without a leading UTF-8 byte order mark (what some editors write)."""
+    return content[3:] if content.startswith(b"\xef\xbb\xbf") else content
 
 
 _BLANK_LINES = re.compile(rb"(?m)^[ \t\f\v]*(?:\n|\Z)")
@@ -284,6 +302,11 @@ def _node_values(folder: str, name: str, n_nodes: int, place: str):
     for part, dtype in (("node_labels", np.int64), ("node_attributes", np.float64)):
         path = _find(folder, name, part)
         if path is None:
+            # Optional, but a FIFO or a folder under its name is not its absence.
+            for ending in _ENDINGS:
+                other = os.path.join(folder, f"{name}_{part}.txt{ending}")
+                if os.path.lexists(other):
+                    raise ValueError(f"{place}: TU file {other!r} is not a regular file")
             continue
         table = _table(path, dtype, None, place)
         if len(table) != n_nodes:
@@ -336,7 +359,8 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
     ----------
     folder : str or os.PathLike
         A folder holding ``DS_A.txt``, ``DS_graph_indicator.txt`` and
-        ``DS_graph_labels.txt`` (each plain or compressed), optionally
+        ``DS_graph_labels.txt`` (each plain or compressed; the plain one when both are
+        there), optionally
         ``DS_node_labels.txt`` and ``DS_node_attributes.txt``.
     name : str, optional
         The dataset's name ``DS``; by default the one dataset of the folder.
@@ -354,13 +378,14 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
     ------
     ValueError
         When ``folder`` holds no TU dataset (or several, and ``name`` is not given), a
-        file is missing, larger than ``MAX_TU_FILE_SIZE`` or not valid compressed data,
+        file is missing (or not a regular file), larger than ``MAX_TU_FILE_SIZE`` or not
+        valid compressed data, the dataset has more than ``MAX_TU_GRAPHS`` graphs,
         a line is not integers (numbers for attributes) or has the wrong count, a node
         id is out of range, an edge joins two graphs, graph ids decrease or skip, or a
         file's line count does not match the nodes or graphs. The message names the
         file (and the line).
     """
-    folder = os.fspath(folder)
+    folder = os.fsdecode(os.fspath(folder))
     if not os.path.isdir(folder):
         raise ValueError(f"TU dataset folder {folder!r} does not exist or is not a folder")
     if name is None:
@@ -383,6 +408,11 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
             )
     ids = _graph_ids(paths["graph_indicator"], place)
     n_graphs = int(ids[-1])
+    if n_graphs > MAX_TU_GRAPHS:
+        raise ValueError(
+            f"{place}: TU file {paths['graph_indicator']!r} holds {n_graphs} graphs, more "
+            f"than {MAX_TU_GRAPHS} (the limit, MAX_TU_GRAPHS); refusing to load them"
+        )
     y = _table(paths["graph_labels"], np.int64, 1, place)[:, 0]
     if len(y) != n_graphs:
         raise ValueError(

@@ -119,7 +119,8 @@ class LimitedReader:
         except (OSError, EOFError, lzma.LZMAError, zlib.error) as exc:  # bad or truncated
             raise ValueError(
                 f"{self.place}: cannot decompress {self.what} {self.path!r}: it is not valid "
-                f"{self.compression} data, so not a valid {self.what.split()[0]}"
+                f"{self.compression} data, so not a valid "
+                f"{'mesh' if self.what == 'mesh file' else self.what}"
             ) from exc
         self.count += len(data)
         if self.count > self.limit:
