@@ -337,10 +337,16 @@ def _estimators(estimator):
 
 def check_pipeline(pipeline) -> None:
     """Check every parameter of the library's estimators in ``pipeline`` against their
-    declared constraints, as their ``fit`` does (``InvalidParameterError``)."""
+    declared constraints, and the checks their ``fit`` adds (``_check_params``: a heat
+    signature's times in range, a resolution's length...), as their ``fit`` does."""
     for estimator in _estimators(pipeline):
+        if not type(estimator).__module__.startswith(__package__ + "."):
+            continue
+        if callable(getattr(estimator, "_check_params", None)):
+            estimator._check_params()  # the constraints, then the rest
+            continue
         constraints = getattr(estimator, "_parameter_constraints", None)
-        if constraints and type(estimator).__module__.startswith(__package__ + "."):
+        if constraints:
             check_params(constraints, estimator.get_params(deep=False), type(estimator).__name__)
 
 

@@ -127,6 +127,10 @@ def no_computation(monkeypatch):
         (["--set", "nowhere__x=1"], "nowhere"),
         (["--preset", "paper", "--set", "distance__ord1__x=1"], "ord1"),
         (["--neighbors", "10", "--folds", "2"], "--neighbors 10 is larger than the smallest"),
+        # beyond the declared constraints, the checks fit adds (they were status 1, after
+        # the samples were generated)
+        (["--set", "eigen__times=[1e-300]"], "times must be finite and between 1e-150"),
+        (["--set", "eigen__eigen_index=()", "--preset", "eigenfunctions"], "eigen_index must"),
     ],
 )
 def test_bad_options_are_one_line_and_status_2_before_computing(
