@@ -184,6 +184,22 @@ def test_bad_meshes_name_the_sample(bad, error, message):
         LaplacianEigenTransformer().fit_transform([bumpy(1), bad])
 
 
+def test_a_sample_too_large_for_the_memory_is_named(monkeypatch):
+    # A graph of 10^9 nodes and one edge passes check_graph, then its eigen stage ran
+    # out of memory with a bare MemoryError that named no sample.
+    from sklearn_meshph.spectral import transformer
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError()
+
+    monkeypatch.setattr(transformer, "_cached_solve", exhausted)
+    with pytest.raises(MemoryError, match=r"^sample 0: not enough memory to solve its \d+ vert"):
+        LaplacianEigenTransformer().fit_transform([bumpy(1)])
+    graph = (5, np.array([[0, 1], [1, 2]]))
+    with pytest.raises(MemoryError, match=r"^sample 0: .* its 5 nodes \(allocation failed\)"):
+        LaplacianEigenTransformer(laplacian="normalized").fit_transform([graph])
+
+
 def test_index_beyond_the_vertex_count():
     triangle = (np.eye(3), np.array([[0, 1, 2]]))
     # An equilateral triangle: eigenvalues 1 and 2 coincide.

@@ -129,12 +129,19 @@ def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
             n_eigenpairs = vertices.n_nodes
         else:
             n_eigenpairs = _block(n_eigenpairs or _SIGNATURE_EIGENPAIRS)
-        (clean, values, vectors), complete = solve_covering(
-            lambda n: _cached_solve(memory, vertices, faces, settings, n, seed, index),
-            n_eigenpairs,
-            indices,
-            _EIGENPAIR_BLOCK,
-        )
+        try:
+            (clean, values, vectors), complete = solve_covering(
+                lambda n: _cached_solve(memory, vertices, faces, settings, n, seed, index),
+                n_eigenpairs,
+                indices,
+                _EIGENPAIR_BLOCK,
+            )
+        except MemoryError as exc:  # a bare MemoryError names no sample
+            size = vertices.n_nodes if graph else len(vertices)
+            raise MemoryError(
+                f"sample {index}: not enough memory to solve its {size} "
+                f"{'nodes' if graph else 'vertices'} ({str(exc) or 'allocation failed'})"
+            ) from None
     edges = kept_edges(vertices, clean.input_to_kept) if graph else None
     # The cleaning report travels back with the results: the parent warns, not the
     # worker, whose warnings joblib would not show.
