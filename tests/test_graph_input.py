@@ -254,6 +254,11 @@ def _one_sided():
         # empty, but not (0, 2): not "no edges"
         (lambda: (3, np.empty((5, 0), int)), ValueError, r"got shape \(5, 0\)"),
         (lambda: (3, np.empty((0, 3), int)), ValueError, r"got shape \(0, 3\)"),
+        (
+            lambda: (3, np.array([[0, 2**63 + 1]], np.uint64)),
+            ValueError,
+            r"edge 0 \(0, 9223372036854775809\) has a node beyond int64",
+        ),
     ],
 )
 def test_a_bad_graph_is_refused_naming_the_sample(sample, error, message):
@@ -287,6 +292,12 @@ def test_a_bad_networkx_graph_is_refused_naming_the_sample():
     huge = nx.Graph([(0, 1)])
     nx.set_node_attributes(huge, {0: 10**400, 1: 2}, "label")
     cases.append((huge, ValueError, "'label' values must be finite, got one beyond float64"))
+    # text and booleans are not numbers, though float() reads "2.5" and True
+    cases.append((nx.Graph([(0, 1, {"weight": "2.5"})]), TypeError, "weight '2.5' is not a"))
+    cases.append((nx.Graph([(0, 1, {"weight": True})]), TypeError, "weight True is not a num"))
+    digits = nx.Graph([(0, 1)])
+    nx.set_node_attributes(digits, {0: "3", 1: "4"}, "label")
+    cases.append((digits, TypeError, "'label' values must be numbers"))
     for sample, error, message in cases:
         with pytest.raises(error, match=f"^sample 3: .*{message}"):
             check_graph(sample, index=3)

@@ -74,6 +74,11 @@ def _edge_array(edges, place: str) -> np.ndarray:
         raise ValueError(f"{place}: edges must be an (m, 2) integer array, got shape {array.shape}")
     if array.dtype.kind not in "iu":
         raise TypeError(f"{place}: edges must be integers, got dtype {array.dtype}")
+    if array.dtype.kind == "u" and array.size and array.max() > np.iinfo(np.int64).max:
+        row = int(np.argmax((array > np.iinfo(np.int64).max).any(axis=1)))
+        raise ValueError(
+            f"{place}: edge {row} {tuple(array[row].tolist())} has a node beyond int64"
+        )
     return array.astype(np.int64, copy=False)
 
 
@@ -211,6 +216,9 @@ def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: st
 
 
 def _weight(value, place: str) -> float:
+    # Text and booleans are not weights, though float() reads "2.5" and True.
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise TypeError(f"{place}: edge weight {value!r} is not a number")
     try:
         weight = float(value)
     except OverflowError:  # an int beyond float64
@@ -233,7 +241,12 @@ def _networkx_node_values(data: list[dict], place: str):
             node = present.index(False)
             raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
         try:
-            column = np.array([d[key] for d in data], dtype=np.float64)
+            raw = np.array([d[key] for d in data])
+            if raw.dtype.kind in "USb" or (  # text ("3" would be read as 3), booleans
+                raw.dtype.kind == "O" and any(isinstance(v, (str, bytes, bool)) for v in raw.flat)
+            ):
+                raise TypeError
+            column = raw.astype(np.float64)
         except OverflowError:  # an int beyond float64
             raise ValueError(
                 f"{place}: node {key!r} values must be finite, got one beyond float64"
