@@ -18,7 +18,7 @@ from ._cli_messages import UsageError, one_line
 from ._param_validation import check_params
 from ._report import RESULT_FILES
 from ._version import VERSION
-from .datasets import SAMPLE_EXTENSIONS
+from .datasets import MAX_SHAPES, SAMPLE_EXTENSIONS, SHAPE_CLASSES
 from .pipelines import PRESETS, make_mesh_distance
 from .spectral import LAPLACIANS, SIGNATURES
 from .spectral.laplacians import GRAPH_LAPLACIANS
@@ -236,6 +236,11 @@ def check_options(args) -> None:
         raise UsageError(f"--neighbors must be at least 1, got {args.neighbors}")
     if args.path is None and args.n_per_class < args.folds:
         raise UsageError(f"--n-per-class {args.n_per_class} is smaller than --folds {args.folds}")
+    if args.path is None and args.n_per_class * len(SHAPE_CLASSES) > MAX_SHAPES:
+        raise UsageError(
+            f"--n-per-class {args.n_per_class} makes more than the {MAX_SHAPES} built-in "
+            f"shapes make_shapes makes ({len(SHAPE_CLASSES)} classes)"
+        )
     if args.n_jobs == 0:
         raise UsageError("--n-jobs must not be 0 (use -1 for all cores)")
     if args.verbose < 0:

@@ -31,6 +31,9 @@ __all__ = [
 #: The most points :func:`sample_point_cloud` draws (holes' and outliers included): its
 #: arrays take about 150 bytes a point at their peak, 1.5 GB here.
 MAX_SAMPLE_POINTS = 10_000_000
+#: Most meshes :func:`make_shapes` makes in one call (a million at its default
+#: resolution is about 20 GB).
+MAX_SHAPES = 100_000
 
 _PLAIN_EXTENSIONS = (".obj", ".ply", ".off", ".stl", ".glb")
 
@@ -328,12 +331,18 @@ def _shape(name, rng, resolution):
     return trimesh.Trimesh(vertices, sphere.faces, process=False)
 
 
+#: Largest radial noise of :func:`make_shapes`: beyond, a radius ``1 + noise N(0, 1)``
+#: turns negative somewhere and the surface folds through itself (at 0.1 that takes a
+#: normal deviate below -10).
+MAX_SHAPE_NOISE = 0.1
+
+
 @validate_params(
     {
         "n_per_class": [Interval(Integral, 1, None, closed="left")],
         "classes": [tuple, list, None],
         "resolution": [Numbers(2)],
-        "noise": [Interval(Real, 0, None, closed="left")],
+        "noise": [Interval(Real, 0, MAX_SHAPE_NOISE, closed="both")],
         "random_state": ["random_state"],
         "return_X_y": ["boolean"],
     }
@@ -362,13 +371,14 @@ def make_shapes(
     Parameters
     ----------
     n_per_class : int, default=10
-        Meshes per class.
+        Meshes per class; at most ``MAX_SHAPES`` (100,000) meshes in all.
     classes : tuple of str, optional
-        A subset of the class names above (default: all six).
+        A subset of the class names above, each at most once (default: all six).
     resolution : (int, int), default=(18, 40)
         Range of the UV sphere's ring and segment counts.
     noise : float, default=0.005
-        Standard deviation of the radial noise, relative to the shape's size.
+        Standard deviation of the radial noise, relative to the shape's size, from 0 to
+        ``MAX_SHAPE_NOISE`` (0.1).
     random_state : int, RandomState instance or None, default=None
         Makes the set reproducible.
     return_X_y : bool, default=False
@@ -393,9 +403,17 @@ def make_shapes(
             f"resolution must be two ints 3 <= low <= high <= 1000, got {resolution!r}"
         )
     names = tuple(_CLASSES) if classes is None else tuple(classes)
-    unknown = [c for c in names if c not in _CLASSES]
-    if unknown:
-        raise ValueError(f"unknown classes {unknown}; available: {tuple(_CLASSES)}")
+    unknown = [c for c in names if not isinstance(c, str) or c not in _CLASSES]
+    if unknown or not names or len(set(names)) < len(names):
+        raise ValueError(
+            f"classes must be distinct names of {tuple(_CLASSES)}, at least one, got "
+            f"{classes!r}" + (f" (unknown: {unknown})" if unknown else "")
+        )
+    if n_per_class * len(names) > MAX_SHAPES:
+        raise ValueError(
+            f"n_per_class={n_per_class} for {len(names)} classes is {n_per_class * len(names)} "
+            f"meshes, more than MAX_SHAPES ({MAX_SHAPES})"
+        )
     rng = np.random.default_rng(check_random_state(random_state).randint(2**31))
     meshes, target = [], []
     for label, name in enumerate(names):

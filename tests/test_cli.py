@@ -130,6 +130,7 @@ def no_computation(monkeypatch):
         # beyond the declared constraints, the checks fit adds (they were status 1, after
         # the samples were generated)
         (["--set", "eigen__times=[1e-300]"], "times must be finite and between 1e-150"),
+        (["--n-per-class", "1000000000"], "--n-per-class 1000000000 makes more than the"),
         (["--set", "eigen__eigen_index=()", "--preset", "eigenfunctions"], "eigen_index must"),
     ],
 )

@@ -39,8 +39,19 @@ def test_make_shapes_resolution_does_not_reveal_the_class():
 def test_make_shapes_subset_and_errors():
     meshes, y = make_shapes(n_per_class=2, classes=("star", "blob"), return_X_y=True)
     assert len(meshes) == 4 and y.tolist() == [0, 0, 1, 1]
-    with pytest.raises(ValueError, match="unknown classes"):
+    with pytest.raises(ValueError, match=r"unknown: \['cube'\]"):
         make_shapes(classes=("cube",))
+    # none, repeats and non-names: an empty set, two classes named "blob", a TypeError
+    for classes in ((), ("blob", "blob"), (["blob"],)):
+        with pytest.raises(ValueError, match="classes must be distinct names of"):
+            make_shapes(classes=classes)
+    # beyond MAX_SHAPES meshes: refused before any is made (10**9 per class ran on)
+    with pytest.raises(ValueError, match="6000000000 meshes, more than MAX_SHAPES"):
+        make_shapes(n_per_class=10**9)
+    # a noise whose radii turn negative (inf: every vertex NaN, with a RuntimeWarning)
+    for noise in (np.inf, 10.0, 0.11):
+        with pytest.raises(ValueError, match="'noise' parameter of make_shapes"):
+            make_shapes(n_per_class=1, noise=noise)
 
 
 def write_folder(root):
@@ -117,7 +128,7 @@ def test_described_classes_are_the_generated_ones():
         assert f'"{name}"' in data.DESCR
     for name in ("rod", "tetrapod"):
         assert name not in data.DESCR
-        with pytest.raises(ValueError, match="unknown classes"):
+        with pytest.raises(ValueError, match="unknown: "):
             make_shapes(classes=(name,))
 
 
