@@ -697,6 +697,10 @@ def test_a_ply_cut_short_is_refused(tmp_path, encoding):
             b"OFF\n12000000 0 0\n" + b" " * 60_000_000,
             r"declares 12000000 vertices and 0 faces, and 1 lines follow it",
         ),
+        (  # one line of spaces before the counts: read whole into a copy of itself
+            b"OFF\n" + b" " * 60_000_000 + b"\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+            r"line 2: a line longer than \d+ bytes \(MAX_LINE_LENGTH\)",
+        ),
         (  # comments before the keyword were read one by one, before any check
             b"#\n" * 1_000_000 + b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
             r"line 4097: 4097 of its first 4097 lines are blank or comments",
@@ -714,7 +718,7 @@ def test_hostile_off_files_are_refused_before_they_cost(tmp_path, content, messa
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert peak < 3 * len(content) + 32 * 2**20
+    assert peak < 2.2 * len(content) + 32 * 2**20  # the content and one copy
     assert time.perf_counter() - start < 20
 
 

@@ -41,6 +41,10 @@ MAX_FACE_CORNERS = 1 << 16
 #: as wide as its longest value (one zero-padded value of 40 KB made a block of vertex
 #: lines take 3.7 GB).
 MAX_VALUE_LENGTH = 64
+#: Longest line, in bytes: a face of ``MAX_FACE_CORNERS`` corners of values of
+#: ``MAX_VALUE_LENGTH``, and a few more values. A file of one line of 2 GB of spaces (9 MB
+#: compressed) was read into a second copy of itself, then out of memory.
+MAX_LINE_LENGTH = (MAX_FACE_CORNERS + 16) * (MAX_VALUE_LENGTH + 1)
 
 
 class _Lines:
@@ -49,14 +53,19 @@ class _Lines:
     asked for, so a long line costs its own bytes, not a Python object per value."""
 
     def __init__(self, data: bytes, where: str):
-        self._lines = iter(io.BytesIO(data))
+        self._stream = io.BytesIO(data)
         self._comments = b"#" in data
         self.number = self.held = 0
         self.where = where
 
     def next_line(self) -> bytes | None:
-        for line in self._lines:
+        while line := self._stream.readline(MAX_LINE_LENGTH + 1):
             self.number += 1
+            if len(line) > MAX_LINE_LENGTH:
+                raise self.error(
+                    f"a line longer than {MAX_LINE_LENGTH} bytes (MAX_LINE_LENGTH), more "
+                    "than the longest face and its values take"
+                )
             if self._comments:
                 comment = line.find(b"#")
                 if comment >= 0:
