@@ -442,8 +442,15 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         saw them."""
         return self._first_fitted().feature_names_in_
 
+    def _check_params(self) -> None:
+        """The parameters' constraints, and the weights against the parts (by ``fit``, and
+        by the main job before any sample is loaded)."""
+        check_params(self._parameter_constraints, self.get_params(deep=False), "CombinedDistance")
+        self._fitted_weights()
+
     def _fitted_weights(self) -> dict:
-        """The weight of each part by name, checked against the parts."""
+        """The weight of each part by name, checked against the parts: at least one
+        positive (all 0 would make every distance 0)."""
         names = [name for name, _ in self.transformer_list]
         if self.weights is None:
             return dict.fromkeys(names, 1.0)
@@ -451,11 +458,20 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
             unknown = set(self.weights) - set(names)
             if unknown:
                 raise ValueError(f"weights name unknown parts {sorted(unknown)}; parts: {names}")
-            return {name: float(self.weights.get(name, 1.0)) for name in names}
-        weights = np.ravel(self.weights)
-        if len(weights) != len(names):
-            raise ValueError(f"weights holds {len(weights)} numbers for {len(names)} parts {names}")
-        return {name: float(w) for name, w in zip(names, weights, strict=True)}
+            fitted = {name: float(self.weights.get(name, 1.0)) for name in names}
+        else:
+            weights = np.ravel(self.weights)
+            if len(weights) != len(names):
+                raise ValueError(
+                    f"weights holds {len(weights)} numbers for {len(names)} parts {names}"
+                )
+            fitted = {name: float(w) for name, w in zip(names, weights, strict=True)}
+        if not any(w > 0 for w in fitted.values()):
+            raise ValueError(
+                f"weights are all 0 ({fitted}): every distance would be 0; give a part a "
+                "positive weight"
+            )
+        return fitted
 
     def _matrices(self, parts, weights, X, n_fitted=None):
         """The matrices of the parts of positive weight on ``X`` (None for the others),
@@ -518,7 +534,7 @@ class CombinedDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEs
         -------
         ndarray of shape (n_samples, n_samples)
         """
-        check_params(self._parameter_constraints, self.get_params(deep=False), "CombinedDistance")
+        self._check_params()
         weights = self._fitted_weights()
         X = _reusable(X)  # every part reads X: a generator is read once
         parts = [(name, clone(part)) for name, part in self.transformer_list]

@@ -131,6 +131,10 @@ def no_computation(monkeypatch):
         # the samples were generated)
         (["--set", "eigen__times=[1e-300]"], "times must be finite and between 1e-150"),
         (["--n-per-class", "1000000000"], "--n-per-class 1000000000 makes more than the"),
+        (["--set", 'distance__weights={"zzz": 1}'], "weights name unknown parts ['zzz']"),
+        (["--set", "distance__weights=[1, 2]"], "weights holds 2 numbers for 4 parts"),
+        (["--set", "distance__weights=[0, 0, 0, 0]"], "weights are all 0"),
+        (["--set", "distance__ord1__distance__order=inf"], "order=inf with a finite internal_p"),
         (["--set", "eigen__eigen_index=()", "--preset", "eigenfunctions"], "eigen_index must"),
     ],
 )

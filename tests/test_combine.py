@@ -178,8 +178,11 @@ def test_a_part_of_weight_zero_is_left_out_even_where_infinite():
     alone = CombinedDistance(parts[1:])
     np.testing.assert_array_equal(zero.fit_transform(X), alone.fit_transform(X))
     np.testing.assert_array_equal(zero.transform(X[:3]), alone.transform(X[:3]))
-    everything_off = CombinedDistance(parts, weights=[0.0, 0.0]).fit_transform(X)
-    np.testing.assert_array_equal(everything_off, np.zeros((8, 8)))
+    # All 0: every distance 0 and a classifier's choice among ties, refused (as
+    # ShapeNeighbors does) before any part is fitted.
+    for off in ([0.0, 0.0], {"far": 0, "cityblock": 0.0}):
+        with pytest.raises(ValueError, match="weights are all 0"):
+            CombinedDistance(parts, weights=off).fit_transform(X)
 
 
 def test_transform_reads_the_fitted_parts_and_weights():
@@ -290,9 +293,9 @@ def test_a_part_of_weight_0_is_neither_fitted_nor_computed():
     )
     index = ShapeNeighbors(other, n_neighbors=2).fit(list(F))
     assert index.kneighbors(list(F[:1]))[1].shape == (1, 2)
-    nothing = CombinedDistance(parts, weights=[0, 0]).fit_transform(F)
-    np.testing.assert_array_equal(nothing, np.zeros((4, 4)))
-    with pytest.raises(ValueError, match="weights are all 0: it ranks nothing"):
+    with pytest.raises(ValueError, match="weights are all 0 "):
+        CombinedDistance(parts, weights=[0, 0]).fit_transform(F)
+    with pytest.raises(ValueError, match="weights are all 0"):
         ShapeNeighbors(CombinedDistance(parts, weights=[0, 0]), n_neighbors=2).fit(list(F))
     # The fitted features are counted by the first part of positive weight.
     import pandas as pd

@@ -140,10 +140,13 @@ class PerDiagramDistance(DiagramTransformer):
         self.n_jobs = n_jobs
         self.dtype = dtype
 
+    def _check_params(self) -> None:
+        super()._check_params()
+        kernel_metric(self.metric, self.order, self.internal_p)  # refused now, not later
+
     def _fit(self, X):
         X = as_sample_list(X, "diagrams")  # read once: X may be a generator
         SampleTransformer.fit(self, X)
-        kernel_metric(self.metric, self.order, self.internal_p)  # refused now, not later
         packed = pack_samples(X)
         self.diagrams_ = packed.samples()
         self.n_diagrams_ = packed.n_diagrams

@@ -153,6 +153,12 @@ class DiagramDistance(PairwiseTransformer):
         """Fit; the fitted samples' symmetric matrix when it was computed, else None."""
         return run_plans([self._fit_plan(X)])[0]
 
+    def _check_params(self) -> None:
+        super()._check_params()
+        # Settings the kernels cannot carry (order=inf with a finite internal_p), refused
+        # with the others: by fit, and by the main job before any sample is loaded.
+        kernel_metric(self.metric, self.order, self.internal_p)
+
     def _fit_plan(self, X):
         """Validate and store the samples now; what fitting computes as a plan: the
         median normalization's matrix of each position, whose finish learns the scales
@@ -161,8 +167,6 @@ class DiagramDistance(PairwiseTransformer):
         SampleTransformer.fit(self, X)
         self.diagrams_ = check_samples(X)
         self.n_diagrams_ = len(self.diagrams_[0])
-        # Refuse settings the kernels cannot carry now, not at transform time.
-        kernel_metric(self.metric, self.order, self.internal_p)
         self.distance_params_ = {name: getattr(self, name) for name in _DISTANCE_PARAMS}
         self.scales_ = np.ones(self.n_diagrams_)
         if self.normalization == "none":

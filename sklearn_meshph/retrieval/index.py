@@ -41,9 +41,7 @@ def _split(distance):
             f"Pipeline ending in one (as make_mesh_distance() returns), got {type(metric).__name__}"
         )
     if isinstance(metric, CombinedDistance):  # refused before a part is fitted
-        weights = metric._fitted_weights()
-        if not any(weight > 0 for weight in weights.values()):
-            raise ValueError("the distance's weights are all 0: it ranks nothing")
+        weights = metric._fitted_weights()  # all 0 refused there
         for name, part in metric.transformer_list:
             if weights[name] > 0:  # a part of weight 0 is left out
                 _final(name, part)
