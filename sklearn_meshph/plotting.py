@@ -35,21 +35,23 @@ def plot_diagram(diagram, ax=None, *, labels=None, title=None):
 
     Parameters
     ----------
-    diagram : ndarray of shape (n, 2), or tuple of them
+    diagram : ndarray of shape (n, 2), or tuple or list of them
         Rows (birth, death); infinite deaths are drawn on a line above the points,
-        marked ``inf``.
+        marked ``inf``. A list of ``(birth, death)`` pairs is one diagram; a list whose
+        entries are 2-D arrays is several. NaN is refused (it is no point).
     ax : matplotlib Axes, optional
     labels : sequence of str, optional
-        Legend entries of the diagrams of a tuple (default: ``diagram 0``, ...).
+        Legend entries of the diagrams, one each (default: ``diagram 0``, ...).
     title : str, optional
 
     Returns
     -------
     ax : matplotlib Axes
     """
+    diagrams = _diagrams_to_plot(diagram)
+    if labels is not None and len(labels) != len(diagrams):
+        raise ValueError(f"labels holds {len(labels)} entries for {len(diagrams)} diagrams")
     ax = _axes(ax)
-    diagrams = list(diagram) if isinstance(diagram, tuple) else [diagram]
-    diagrams = [np.asarray(d, dtype=float).reshape(-1, 2) for d in diagrams]
     finite = np.concatenate([d[np.isfinite(d)] for d in diagrams] + [np.zeros(0)])
     lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     pad = 0.05 * (hi - lo or 1.0)
@@ -78,6 +80,28 @@ def plot_diagram(diagram, ax=None, *, labels=None, title=None):
     if title:
         ax.set_title(title)
     return ax
+
+
+def _diagrams_to_plot(diagram) -> list[np.ndarray]:
+    """The diagrams of ``plot_diagram``'s argument, each checked: ``(n, 2)`` (an empty
+    one of any shape), no NaN. Other shapes were reshaped into made-up points (giotto-tda's
+    ``(n, 3)`` rows among them), and a NaN death drawn as an essential class."""
+    several = isinstance(diagram, tuple) or (
+        isinstance(diagram, list) and len(diagram) > 0 and all(np.ndim(d) == 2 for d in diagram)
+    )
+    diagrams = []
+    for k, d in enumerate(diagram if several else [diagram]):
+        d = np.asarray(d, dtype=float)
+        place = f"diagram {k}" if several else "the diagram"
+        if d.size == 0:
+            d = d.reshape(0, 2)
+        elif d.ndim != 2 or d.shape[1] != 2:
+            raise ValueError(f"{place} must have shape (n, 2) (birth, death), got {d.shape}")
+        nan = np.flatnonzero(np.isnan(d).any(axis=1))
+        if len(nan):
+            raise ValueError(f"{place}: row {nan[0]} holds NaN, which is no point")
+        diagrams.append(d)
+    return diagrams
 
 
 def _class_styles(n_classes: int):

@@ -160,6 +160,19 @@ def test_plots_are_written(tmp_path):
     assert len(styles) == 14 and many.get_legend().get_texts()[-1].get_text().endswith("(empty)")
     ax = plotting.plot_diagram(diagram[:2])  # a new figure of its own
     assert ax not in axes and len(ax.collections[0].get_offsets()) == 2
+    # A list of 2-D arrays is several diagrams (it was merged into one); a list of
+    # pairs is one.
+    listed = plotting.plot_diagram([diagram, diagram[:2]], ax=fig.subplots())
+    assert [len(c.get_offsets()) for c in listed.collections] == [3, 2]
+    pairs = plotting.plot_diagram([[0.0, 1.0], [0.5, 2.0]], ax=fig.subplots())
+    assert [len(c.get_offsets()) for c in pairs.collections] == [2]
+    # Other shapes were reshaped into made-up points; NaN deaths drawn as essential.
+    with pytest.raises(ValueError, match=r"must have shape \(n, 2\) .*got \(2, 3\)"):
+        plotting.plot_diagram(np.array([[0.0, 1.0, 0.0], [0.0, 2.0, 1.0]]))
+    with pytest.raises(ValueError, match="diagram 1: row 1 holds NaN"):
+        plotting.plot_diagram((diagram, np.array([[0.0, 1.0], [0.0, np.nan]])))
+    with pytest.raises(ValueError, match="labels holds 1 entries for 2 diagrams"):
+        plotting.plot_diagram((diagram, diagram), labels=["H0"])
     mesh = trimesh.creation.icosphere(1)
     ax = plotting.plot_mesh_function(mesh.vertices, mesh.faces, mesh.vertices[:, 2])
     ax.figure.savefig(tmp_path / "mesh.png")
