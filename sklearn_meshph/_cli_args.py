@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import ast
 import json
-import os
 import tempfile
 from pathlib import Path
 
@@ -212,7 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--output",
-        type=Path,
+        type=_output_path,
         default=Path("meshph-output"),
         help="folder for the result files and pictures (created)",
     )
@@ -245,8 +244,22 @@ def check_options(args) -> None:
         raise UsageError("--n-jobs must not be 0 (use -1 for all cores)")
     if args.verbose < 0:
         raise UsageError(f"--verbose must be at least 0, got {args.verbose}")
-    if args.memory is not None and (not args.memory.strip() or os.path.isfile(args.memory)):
-        raise UsageError(f"--memory must name a folder, got {args.memory!r}")
+    if args.memory is not None:
+        _check_memory(args.memory)
+
+
+def _check_memory(memory: str) -> None:
+    """``--memory`` must name a folder, or where one can be made: not a file, a FIFO or a
+    device (the cache then went unused with a warning per sample), nor a path under one."""
+    if not memory.strip():
+        raise UsageError(f"--memory must name a folder, got {memory!r}")
+    path = Path(memory)
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if existing.exists() and not existing.is_dir():
+        where = "" if existing == path else f" is under {str(existing)!r}, which"
+        raise UsageError(f"--memory must name a folder: {memory!r}{where} is not a folder")
 
 
 def choose_preset(args, graphs: bool) -> None:
@@ -268,6 +281,14 @@ def check_graph_pipeline(pipeline) -> None:
                 + ", ".join(GRAPH_LAPLACIANS.names)
                 + f" (the {GRAPH_PRESET!r} preset's pipeline is made for them)"
             )
+
+
+def _output_path(text: str) -> Path:
+    """``--output``'s folder: an empty name is refused (``Path("")`` is the current
+    folder, where every result file would have gone)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must name a folder, got an empty name")
+    return Path(text)
 
 
 def check_output(output: Path) -> None:

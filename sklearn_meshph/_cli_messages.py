@@ -28,6 +28,12 @@ class DataError(Exception):
     """A sample that cannot be processed: one line naming its file, exit status 1."""
 
 
+def printable(name) -> str:
+    """``name`` with its control characters (a file named with a line break) escaped as
+    Python writes them, so that what names it stays on its line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(name))
+
+
 def one_line(text) -> str:
     """``text`` with every run of white space (line breaks too) made one space."""
     return " ".join(str(text).split())
@@ -50,7 +56,7 @@ class Names:
     def name(self, index: int) -> str:
         if self.files is None or not 0 <= index < len(self.files):
             return f"sample {index}"
-        return f"sample {index} ({self.files[index]})"
+        return f"sample {index} ({printable(self.files[index])})"
 
     def message(self, text) -> str:
         """``text`` on one line, with each ``sample K`` naming its file."""

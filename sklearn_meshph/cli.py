@@ -54,6 +54,7 @@ from ._cli_messages import (
     first_run_note,
     note,
     one_line,
+    printable,
     sample_indices,
 )
 from ._report import (
@@ -387,7 +388,12 @@ def _diagrams(tables, n_samples, n_functions):
     found = [(name, stage, out) for name, stage, out in tables if hasattr(stage, "diagram_names")]
     if not found:
         return None
-    per_sample = [sum((tuple(out[i]) for _, _, out in found), ()) for i in range(n_samples)]
+    # A stage of one diagram per sample gives an array: tuple() of it would split its
+    # rows into diagrams of one point each.
+    per_sample = [
+        sum((out[i] if isinstance(out[i], tuple) else (out[i],) for _, _, out in found), ())
+        for i in range(n_samples)
+    ]
     labels = []
     for name, stage, _ in found:
         part = name.split("__")[-2] if name.count("__") > 1 else ""
@@ -442,7 +448,7 @@ def _run(args) -> int:
         f"(+/- {scores.std():.3f}; folds {', '.join(f'{s:.2f}' for s in scores)})"
     )
     print("\nconfusion matrix (rows: true class, columns: predicted)")
-    print(format_confusion(y, predicted, class_names))
+    print(format_confusion(y, predicted, [printable(n) for n in class_names]))
 
     diagrams = _diagrams(tables, len(y), fields[0].n_functions)
     summary = {
@@ -467,7 +473,7 @@ def _run(args) -> int:
     labels = (class_names, filenames)
     # The data first: a disk that fills at the pictures keeps the results.
     written = write_data(args.output, matrix, diagrams, predictions, *labels, summary)
-    print(f"\nresults in {args.output}: " + ", ".join(p.name for p in written))
+    print(f"\nresults in {printable(args.output)}: " + ", ".join(p.name for p in written))
     if not args.no_plots:
         t = time.perf_counter()
         try:

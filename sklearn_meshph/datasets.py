@@ -91,8 +91,9 @@ def load_mesh_folder(
 
     Like :func:`sklearn.datasets.load_files`: every sub-folder of ``path`` is a class
     (sorted by name), every mesh or point-cloud file in it a sample (sorted by name).
-    Sub-folders whose names start with ``_`` or ``.`` are ignored, and so are files whose
-    names do not end with one of ``extensions``. A sub-folder without such files is not
+    Sub-folders whose names start with ``_`` or ``.`` are ignored, and so are hidden
+    files (names starting with ``.``: macOS's ``._`` companions, editors' backups) and
+    files whose names do not end with one of ``extensions``. A sub-folder without such files is not
     a class.
 
     Point clouds are ``.xyz`` and ``.pts`` text files and files of a mesh format without
@@ -173,7 +174,9 @@ def load_mesh_folder(
     names, filenames, target = [], [], []
     for folder in classes:
         files = sorted(
-            f for f in folder.iterdir() if f.is_file() and f.name.lower().endswith(endings)
+            f
+            for f in folder.iterdir()
+            if f.is_file() and not f.name.startswith(".") and f.name.lower().endswith(endings)
         )
         if not files:
             continue

@@ -118,6 +118,9 @@ def no_computation(monkeypatch):
         (["--n-jobs", "0"], "--n-jobs must not be 0"),
         (["--preset", "nope"], "'preset' parameter of make_mesh_distance"),
         (["--memory", ""], "--memory must name a folder"),
+        # not a folder, nor under one: the cache went unused, a warning per sample
+        (["--memory", "/dev/null"], "'/dev/null' is not a folder"),
+        (["--memory", "/dev/null/cache"], "is under '/dev/null', which is not a folder"),
         (["--n-scales", "0"], "'n_scales' parameter of LaplacianEigenTransformer"),
         (["--set", "eigen__n_scales=0"], "'n_scales' parameter of LaplacianEigenTransformer"),
         (["--set", "distance__ord1__distance__order=0.5"], "'order' parameter of DiagramDistance"),
@@ -152,6 +155,7 @@ def test_set_values_are_read_as_json_or_python_literals(tmp_path):
     argv = ["--set", "eigen__eigen_index=(1, 2)", "--set", "eigen__laplacian=graph"]
     argv += ["--set", 'distance__weights={"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0}']
     argv += ["--set", "distance__ord1__distance__order=inf", "--set", "eigen__n_eigenpairs=null"]
+    argv += ["--set", "distance__ord1__distance__internal_p=inf"]  # the bottleneck distance
     args = parser.parse_args([*argv, "--eigen-index", "2", "--output", str(tmp_path)])
     pipeline = cli.build_pipeline(args)
     eigen = pipeline.named_steps["eigen"]
@@ -760,3 +764,43 @@ def test_the_module_run_is_read_from_the_interpreters_options(options, module):
     from sklearn_meshph._interrupt import _module_run
 
     assert _module_run(options) == module
+
+
+def test_an_empty_output_name_is_refused_not_the_current_folder(tmp_path, capfd, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as stop:
+        main(["--output", "", *FAST])
+    assert stop.value.code == 2
+    assert "--output: must name a folder, got an empty name" in capfd.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
+def test_names_with_line_breaks_stay_on_their_line(tmp_path, capfd):
+    # A file named with a line break split the error line; a class folder so named,
+    # the confusion matrix.
+    root = tmp_path / "data"
+    for name in ("ba\nll", "box"):
+        (root / name).mkdir(parents=True)
+        for k in range(2):
+            trimesh.creation.icosphere(2).export(root / name / f"{k}.off")
+    (root / "box" / "b\nad.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n")
+    argv = [str(root), "--folds", "2", *FAST]
+    assert main([*argv, "--output", str(tmp_path / "o")]) == 1
+    assert "(box/b\\nad.off)" in _one_error_line(capfd)
+    (root / "box" / "b\nad.off").unlink()
+    assert main([*argv, "--output", str(tmp_path / "o\nut")]) == 0
+    out = capfd.readouterr().out
+    assert "ba\\nll" in out and "ba\nll" not in out and "o\\nut:" in out
+
+
+def test_a_stage_of_one_diagram_per_sample_keeps_its_diagrams_whole():
+    # tuple() of a sample's (n, 2) array split its rows into n one-point diagrams (the
+    # paper preset's pictures and diagrams.npz).
+    class OneDiagram:
+        def diagram_names(self, n_functions):
+            return ["sublevel H0"]
+
+    diagram = np.array([[0.0, 1.0], [0.5, np.inf], [0.2, 0.3]])
+    samples, labels = cli._diagrams([("persistence", OneDiagram(), [diagram])], 1, 1)
+    assert labels == ["sublevel H0"] and len(samples[0]) == 1
+    np.testing.assert_array_equal(samples[0][0], diagram)

@@ -62,6 +62,7 @@ def write_folder(root):
     (root / "_extra").mkdir()  # folders starting with an underscore are skipped
     trimesh.creation.box().export(root / "_extra" / "ignored.obj")
     (root / "box" / "notes.txt").write_text("not a mesh")
+    (root / "box" / "._a.ply").write_bytes(b"\0\5\26\7")  # macOS metadata: skipped
 
 
 def test_load_mesh_folder(tmp_path):
