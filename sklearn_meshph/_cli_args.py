@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import ast
 import json
+import re
 import tempfile
 from pathlib import Path
 
@@ -397,5 +398,12 @@ def build_pipeline(args):
             pipeline.set_params(**{name: value})
         check_pipeline(pipeline)
     except (ValueError, TypeError, KeyError) as exc:  # InvalidParameterError is both
-        raise UsageError(one_line(exc)) from None
+        # scikit-learn names an unknown parameter's estimator by its whole repr (1,500
+        # characters for the default pipeline): its class name says where.
+        text = re.sub(
+            r"for estimator (\w+)\(.*?\)\. Valid parameters",
+            r"for estimator \1. Valid parameters",
+            one_line(exc),
+        )
+        raise UsageError(text) from None
     return pipeline

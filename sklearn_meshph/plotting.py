@@ -138,11 +138,25 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
     -------
     ax : matplotlib Axes
     """
-    ax = _axes(ax)
     embedding = np.asarray(embedding)
     labels = np.asarray(labels)
-    classes = np.unique(labels)
+    if embedding.ndim != 2 or embedding.shape[1] != 2 or len(labels) != len(embedding):
+        raise ValueError(
+            f"embedding must have shape (n, 2) and labels shape (n,), got {embedding.shape} "
+            f"and {labels.shape}"
+        )
     n_names = 0 if target_names is None else len(target_names)
+    if labels.size and (
+        labels.dtype.kind not in "iu" or labels.min() < 0 or (n_names and labels.max() >= n_names)
+    ):
+        # -1 took the last name; text failed deep in NumPy.
+        raise ValueError(
+            "labels must be integers from 0"
+            + (f" to {n_names - 1} (indices of target_names)" if n_names else "")
+            + f", got {np.unique(labels)[:5].tolist()}..."
+        )
+    ax = _axes(ax)
+    classes = np.unique(labels)
     n_classes = int(max(classes.max() + 1, n_names)) if classes.size else 0
     styles = _class_styles(n_classes)
     for c in classes:

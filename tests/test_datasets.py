@@ -179,6 +179,13 @@ def test_plots_are_written(tmp_path):
     ax.figure.savefig(tmp_path / "mesh.png")
     ax = plotting.plot_embedding(np.random.default_rng(0).random((6, 2)), [0, 0, 1, 1, 2, 2])
     assert len(ax.collections) == 3
+    # -1 took the last of the names; text labels failed deep in NumPy
+    points = np.zeros((2, 2))
+    for labels in ([0, -1], ["a", "b"], [0, 3]):
+        with pytest.raises(ValueError, match="labels must be integers from 0"):
+            plotting.plot_embedding(points, labels, target_names=["x", "y", "z"])
+    with pytest.raises(ValueError, match=r"embedding must have shape \(n, 2\)"):
+        plotting.plot_embedding(np.zeros((2, 3)), [0, 1])
     ax.figure.savefig(tmp_path / "embedding.png")
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("diagrams.png", "mesh.png"))
     import matplotlib.pyplot as plt
