@@ -18,8 +18,9 @@ from ._cli_messages import UsageError, one_line
 from ._param_validation import check_params
 from ._report import RESULT_FILES
 from ._version import VERSION
-from .datasets import MAX_SHAPES, SAMPLE_EXTENSIONS, SHAPE_CLASSES
+from .datasets import SAMPLE_EXTENSIONS
 from .pipelines import PRESETS, make_mesh_distance
+from .shapes import MAX_SHAPES, SHAPE_CLASSES
 from .spectral import LAPLACIANS, SIGNATURES
 from .spectral.laplacians import GRAPH_LAPLACIANS
 

@@ -30,6 +30,7 @@ LAYERS = (
     ("vectorization",),
     ("combine", "leaf_forest", "size_switch"),
     ("graph_classifier",),
+    ("shapes",),
     ("pipelines", "datasets", "plotting", "retrieval"),
     ("_report", "_cli_args", "_cli_messages", "cli", "__main__"),
 )
