@@ -398,6 +398,12 @@ def build_pipeline(args):
         for name, value in args.assignments:
             pipeline.set_params(**{name: value})
         check_pipeline(pipeline)
+        signature = pipeline.named_steps["eigen"].get_params().get("signature")
+        if args.eigen_index is not None and SIGNATURES[signature].value is not None:
+            raise UsageError(
+                f"--eigen-index picks eigenfunctions, which the signature {signature!r} does "
+                "not use (it sums over the eigenpairs); add --signature eigenfunctions"
+            )
     except (ValueError, TypeError, KeyError) as exc:  # InvalidParameterError is both
         # scikit-learn names an unknown parameter's estimator by its whole repr (1,500
         # characters for the default pipeline): its class name says where.

@@ -134,6 +134,8 @@ def no_computation(monkeypatch):
         # the samples were generated)
         (["--set", "eigen__times=[1e-300]"], "times must be finite and between 1e-150"),
         (["--n-per-class", "1000000000"], "--n-per-class 1000000000 makes more than the"),
+        # an option that would do nothing: the default's signature uses no eigenfunction
+        (["--eigen-index", "2"], "the signature 'log-hks' does not use"),
         (["--set", 'distance__weights={"zzz": 1}'], "weights name unknown parts ['zzz']"),
         (["--set", "distance__weights=[1, 2]"], "weights holds 2 numbers for 4 parts"),
         (["--set", "distance__weights=[0, 0, 0, 0]"], "weights are all 0"),
@@ -158,6 +160,7 @@ def test_set_values_are_read_as_json_or_python_literals(tmp_path):
     argv += ["--set", 'distance__weights={"ord1": 1, "ext0": 0, "ext1": 1, "dna": 0}']
     argv += ["--set", "distance__ord1__distance__order=inf", "--set", "eigen__n_eigenpairs=null"]
     argv += ["--set", "distance__ord1__distance__internal_p=inf"]  # the bottleneck distance
+    argv += ["--signature", "eigenfunctions"]  # else --eigen-index would do nothing
     args = parser.parse_args([*argv, "--eigen-index", "2", "--output", str(tmp_path)])
     pipeline = cli.build_pipeline(args)
     eigen = pipeline.named_steps["eigen"]
