@@ -182,7 +182,7 @@ def load_mesh_folder(
         filenames.extend(files)
     if not filenames:
         raise ValueError(
-            f"no mesh files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
+            f"no mesh or point-cloud files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
         )
     skipped = []
     if load:

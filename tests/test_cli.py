@@ -74,7 +74,7 @@ def test_folder_without_meshes_is_one_line_and_status_2(tmp_path, capfd):
     (tmp_path / "data" / "a" / "notes.txt").write_text("not a mesh")
     code = main([str(tmp_path / "data"), "--no-plots", "--output", str(tmp_path / "out")])
     assert code == 2
-    assert "no mesh files" in _one_error_line(capfd)
+    assert "no mesh or point-cloud files" in _one_error_line(capfd)
     assert not (tmp_path / "out").exists()
 
 

@@ -111,7 +111,7 @@ def test_load_mesh_folder_reads_point_clouds_beside_meshes(tmp_path):
 def test_load_mesh_folder_errors(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         load_mesh_folder(tmp_path / "missing")
-    with pytest.raises(ValueError, match="no mesh files"):
+    with pytest.raises(ValueError, match="no mesh or point-cloud files"):
         load_mesh_folder(tmp_path)
 
 
