@@ -182,7 +182,8 @@ def load_mesh_folder(
         filenames.extend(files)
     if not filenames:
         raise ValueError(
-            f"no mesh or point-cloud files ({', '.join(endings)}) in sub-folders of {os.fspath(path)!r}"
+            f"no mesh or point-cloud files ({', '.join(endings)}) in sub-folders of "
+            f"{os.fspath(path)!r}"
         )
     skipped = []
     if load:
