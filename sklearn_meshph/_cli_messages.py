@@ -7,6 +7,7 @@ import glob
 import os
 import re
 import sys
+import unicodedata
 from pathlib import Path
 
 __all__ = [
@@ -28,10 +29,18 @@ class DataError(Exception):
     """A sample that cannot be processed: one line naming its file, exit status 1."""
 
 
+#: What is escaped in a printed name: control characters (line breaks, terminal escape
+#: sequences), line and paragraph separators, lone surrogates. Not spaces such as a
+#: full-width one, nor joiners and direction marks, which names in many scripts hold.
+_UNPRINTED = frozenset(("Cc", "Zl", "Zp", "Cs"))
+
+
 def printable(name) -> str:
-    """``name`` with its control characters (a file named with a line break) escaped as
-    Python writes them, so that what names it stays on its line."""
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(name))
+    """``name`` with its control characters (a file named with a line break or a terminal
+    escape) escaped as Python writes them, so that what names it stays on its line."""
+    return "".join(
+        repr(c)[1:-1] if unicodedata.category(c) in _UNPRINTED else c for c in str(name)
+    )
 
 
 def one_line(text) -> str:

@@ -312,7 +312,7 @@ def _from_folder(args):
     if skipped:
         print(f"skipped {len(skipped)} file(s) that cannot be read:")
         for _, reason in skipped:
-            print(wrap(f"  {reason}"))
+            print(wrap(f"  {printable(reason)}"))
         class_names = [str(n) for n in data.target_names]
         check_folds(data.target, class_names, args.folds, args.neighbors, args.random_state)
         names = Names(data.filenames, args.path)
@@ -363,8 +363,8 @@ def _describe(samples, class_names, source, pipeline, args) -> None:
         if n_clouds == len(samples)
         else f"samples ({len(samples) - n_clouds} meshes, {n_clouds} point clouds)"
     )
-    print(f"data: {source}: {len(samples)} {kind}, {len(class_names)} classes")
-    print(wrap("classes: " + ", ".join(class_names)))
+    print(f"data: {printable(source)}: {len(samples)} {kind}, {len(class_names)} classes")
+    print(wrap("classes: " + ", ".join(printable(n) for n in class_names)))
     print(f"pipeline: preset {args.preset!r} (every parameter in summary.json)")
     for name, step in pipeline.steps:
         print(wrap(f"  {name}: {_outline(step)}"))
@@ -481,9 +481,9 @@ def _run(args) -> int:
                 args.output, matrix, y, class_names, fields, args.random_state, diagrams
             )
         except ImportError as exc:
-            print(f"pictures skipped: {exc}")
+            print(f"pictures skipped: {one_line(exc)}")
         else:
-            print(f"pictures in {args.output}: " + ", ".join(p.name for p in pictures))
+            print(f"pictures in {printable(args.output)}: " + ", ".join(p.name for p in pictures))
         timings["pictures"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - start
     if not args.no_plots:  # the summary's timings, the pictures' included

@@ -25,6 +25,7 @@ from sklearn_meshph import (
     make_shapes,
     pairwise_diagram_distances,
 )
+from sklearn_meshph._cli_messages import printable
 from sklearn_meshph.cli import build_parser, format_confusion, main
 
 FAST = ["--no-plots", "--verbose", "0", "--n-jobs", "1"]
@@ -783,7 +784,7 @@ def test_an_empty_output_name_is_refused_not_the_current_folder(tmp_path, capfd,
 def test_names_with_line_breaks_stay_on_their_line(tmp_path, capfd):
     # A file named with a line break split the error line; a class folder so named,
     # the confusion matrix.
-    root = tmp_path / "data"
+    root = tmp_path / "da\nta"
     for name in ("ba\nll", "box"):
         (root / name).mkdir(parents=True)
         for k in range(2):
@@ -793,9 +794,16 @@ def test_names_with_line_breaks_stay_on_their_line(tmp_path, capfd):
     assert main([*argv, "--output", str(tmp_path / "o")]) == 1
     assert "(box/b\\nad.off)" in _one_error_line(capfd)
     (root / "box" / "b\nad.off").unlink()
-    assert main([*argv, "--output", str(tmp_path / "o\nut")]) == 0
+    (root / "box").rename(root / "b\x1b[31mox")  # a terminal escape
+    plots = [a for a in argv if a != "--no-plots"]
+    assert main([*plots, "--output", str(tmp_path / "o\nut")]) == 0
     out = capfd.readouterr().out
-    assert "ba\\nll" in out and "ba\nll" not in out and "o\\nut:" in out
+    assert "ba\\nll" in out and "ba\nll" not in out and "\x1b" not in out
+    for start in ("data: ", "classes: ", "results in ", "pictures in "):
+        line = next(line for line in out.splitlines() if line.startswith(start))
+        assert "\\n" in line or "\\x1b" in line, line
+    # names in other scripts are printed as they are, their spaces included
+    assert printable("猫\u3000犬 café\u200f") == "猫\u3000犬 café\u200f"
 
 
 def test_a_stage_of_one_diagram_per_sample_keeps_its_diagrams_whole():
