@@ -38,9 +38,7 @@ _UNPRINTED = frozenset(("Cc", "Zl", "Zp", "Cs"))
 def printable(name) -> str:
     """``name`` with its control characters (a file named with a line break or a terminal
     escape) escaped as Python writes them, so that what names it stays on its line."""
-    return "".join(
-        repr(c)[1:-1] if unicodedata.category(c) in _UNPRINTED else c for c in str(name)
-    )
+    return "".join(repr(c)[1:-1] if unicodedata.category(c) in _UNPRINTED else c for c in str(name))
 
 
 def one_line(text) -> str:

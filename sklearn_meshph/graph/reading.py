@@ -28,6 +28,7 @@ import warnings
 import numpy as np
 
 from ..mesh.reading import COMPRESSIONS, decompress, split_compression
+from ..mesh.text import long_line_offset
 from .validation import Graph
 
 __all__ = [
@@ -99,7 +100,6 @@ def _without_bom(content: bytes) -> bytes:
 
 _BLANK_LINES = re.compile(rb"(?m)^[ \t\f\v]*(?:\n|\Z)")
 _MAX_WIDTH = 1 << 16  # values of one line looked at, on the error path
-_LINE_SCAN = 8 << 20  # bytes looked at a time for a long line (8 per line end in them)
 #: Longest line of a TU file, in bytes (1 MiB: tens of thousands of attributes).
 MAX_TU_LINE = 1 << 20
 _ERROR_CHUNK = 1 << 16  # bytes of text looked at a time (a Python object per line in it)
@@ -219,31 +219,13 @@ def _loaded(content: bytes, dtype) -> np.ndarray | None:
         return None
 
 
-def _long_line(content: bytes) -> int | None:
-    """The byte offset of the first line longer than ``MAX_TU_LINE`` bytes, or None.
-    NumPy's parser takes 13 to 20 bytes per byte of such a line (a 50 MB line of "1,"),
-    and TU lines hold a few numbers: it is refused before parsing."""
-    data = np.frombuffer(content, np.uint8)
-    line_start = 0
-    for start in range(0, len(data), _LINE_SCAN):
-        chunk = data[start : start + _LINE_SCAN]
-        ends = np.flatnonzero((chunk == 10) | (chunk == 13)) + start
-        if len(ends):
-            lengths = np.diff(ends, prepend=line_start)
-            long = np.flatnonzero(lengths > MAX_TU_LINE)
-            if len(long):
-                return int(ends[long[0]] - lengths[long[0]])
-            line_start = int(ends[-1]) + 1
-        if start + len(chunk) - line_start > MAX_TU_LINE:
-            return line_start
-    return None
-
-
 def _table(path: str, dtype, width: int | None, place: str) -> np.ndarray:
     """The numbers of a TU file as a 2-d array: a row per non-blank line, ``width``
     columns (any width, the same on every line, when None)."""
     content = _content(path, place)
-    offset = _long_line(content)
+    # NumPy's parser takes 13 to 20 bytes per byte of a long line (a 50 MB line of "1,"),
+    # and TU lines hold a few numbers: refused before parsing.
+    offset = long_line_offset(content, MAX_TU_LINE)
     if offset is not None:
         raise ValueError(
             f"{place}: cannot read TU file {path!r}: the line at byte {offset} is longer "

@@ -27,10 +27,12 @@ import zlib
 import numpy as np
 
 from ._off import read_off
+from .text import long_line_offset
 
 __all__ = [
     "COMPRESSIONS",
     "MAX_DECOMPRESSED_SIZE",
+    "MAX_TEXT_LINE",
     "MAX_TEXT_LINES",
     "MAX_TEXT_TOKENS",
     "MESH_FORMATS",
@@ -60,6 +62,10 @@ MAX_DECOMPRESSED_SIZE = 2 * 1024**3
 #: memory is that of the mesh.
 MAX_TEXT_TOKENS = 16 * 1024**2
 MAX_TEXT_LINES = 8 * 1024**2
+#: Longest line of a text mesh parsed by trimesh (OBJ, ASCII PLY and STL), in bytes: its
+#: parsers copy a line several times over (a 291 KB .obj.gz of one 300 MB line of spaces
+#: took 890 MB), and no face or vertex line comes near it.
+MAX_TEXT_LINE = 1 << 22
 
 #: File name endings of the compressed formats read, and their standard-library openers.
 COMPRESSIONS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
@@ -200,6 +206,12 @@ def _check_text_size(buffer, file_type: str, place: str, path: str) -> None:
     an ASCII PLY, whatever the line holds, blank lines included)."""
     if not _is_text(buffer, file_type):
         return
+    long = long_line_offset(buffer, MAX_TEXT_LINE)
+    if long is not None:
+        raise ValueError(
+            f"{place}: mesh file {path!r} has a line longer than {MAX_TEXT_LINE} bytes "
+            f"(MAX_TEXT_LINE) at byte {long}; refusing to parse it"
+        )
     tokens, lines = count_text(buffer)
     for count, limit, what, name in (
         (tokens, MAX_TEXT_TOKENS, "values", "MAX_TEXT_TOKENS"),
