@@ -211,6 +211,14 @@ def test_node_values_of_a_graph_are_checked():
         Graph(2, [[0, 1]], [1.0], node_values=["C", "O"])
     with pytest.raises(ValueError, match="node values must be finite, got one beyond float64"):
         Graph(2, [[0, 1]], [1.0], node_values=[10**400, 1])
+    # Text is refused in every form of a graph (np.asarray read "3" as 3.0); booleans are
+    # 0 and 1, as scikit-learn reads them.
+    with pytest.raises(TypeError, match="node values must be numbers, not text"):
+        Graph(2, [[0, 1]], [1.0], node_values=np.array(["1", "2"]))
+    with pytest.raises(TypeError, match="edge weights must be numbers, not text"):
+        Graph(2, [[0, 1]], ["2.5"])
+    flags = Graph(2, [[0, 1]], [True], node_values=np.array([[True, False], [False, True]]))
+    assert flags.weights.tolist() == [1.0] and flags.node_values.tolist() == [[1, 0], [0, 1]]
 
 
 # Bad graphs, named -------------------------------------------------------------
@@ -292,9 +300,8 @@ def test_a_bad_networkx_graph_is_refused_naming_the_sample():
     huge = nx.Graph([(0, 1)])
     nx.set_node_attributes(huge, {0: 10**400, 1: 2}, "label")
     cases.append((huge, ValueError, "'label' values must be finite, got one beyond float64"))
-    # text and booleans are not numbers, though float() reads "2.5" and True
+    # text is not a number, though float() reads "2.5"
     cases.append((nx.Graph([(0, 1, {"weight": "2.5"})]), TypeError, "weight '2.5' is not a"))
-    cases.append((nx.Graph([(0, 1, {"weight": True})]), TypeError, "weight True is not a num"))
     digits = nx.Graph([(0, 1)])
     nx.set_node_attributes(digits, {0: "3", 1: "4"}, "label")
     cases.append((digits, TypeError, "'label' values must be numbers"))

@@ -82,9 +82,24 @@ def _edge_array(edges, place: str) -> np.ndarray:
     return array.astype(np.int64, copy=False)
 
 
+def _numbers_only(values, what: str, place: str) -> None:
+    """Refuse text, which ``np.asarray(..., float64)`` reads as numbers ("3" as 3.0), so
+    that every form of a graph takes the same values. Booleans are 0 and 1, as
+    scikit-learn reads them (a sparse boolean adjacency, one-hot node attributes)."""
+    raw = np.asarray(values, dtype=object) if not isinstance(values, np.ndarray) else values
+    if raw.dtype.kind in "US" or (
+        raw.dtype.kind == "O" and any(isinstance(v, (str, bytes)) for v in raw.flat)
+    ):
+        raise TypeError(f"{place}: {what} must be numbers, not text")
+
+
 def _check_node_values(values, n_nodes: int, place: str):
     if values is None:
         return None
+    try:
+        _numbers_only(values, "node values", place)
+    except ValueError:  # ragged: refused below as a shape
+        pass
     try:
         values = np.asarray(values, dtype=np.float64)
     except OverflowError:  # an int beyond float64
@@ -135,6 +150,10 @@ class Graph:
         place = "graph"
         n_nodes = _n_nodes(self.n_nodes, place)
         edges = _edge_array(self.edges, place)
+        try:
+            _numbers_only(self.weights, "edge weights", place)
+        except ValueError:  # ragged: refused below
+            pass
         weights = np.asarray(self.weights, dtype=np.float64).reshape(-1)
         if len(weights) != len(edges):
             raise ValueError(f"{place}: {len(edges)} edges but {len(weights)} weights")
@@ -216,8 +235,8 @@ def _from_edges(n_nodes: int, edges: np.ndarray, weights, node_values, place: st
 
 
 def _weight(value, place: str) -> float:
-    # Text and booleans are not weights, though float() reads "2.5" and True.
-    if isinstance(value, (str, bytes, bool, np.bool_)):
+    # Text is not a weight, though float() reads "2.5" (True is 1, as everywhere).
+    if isinstance(value, (str, bytes)):
         raise TypeError(f"{place}: edge weight {value!r} is not a number")
     try:
         weight = float(value)
@@ -242,8 +261,8 @@ def _networkx_node_values(data: list[dict], place: str):
             raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
         try:
             raw = np.array([d[key] for d in data])
-            if raw.dtype.kind in "USb" or (  # text ("3" would be read as 3), booleans
-                raw.dtype.kind == "O" and any(isinstance(v, (str, bytes, bool)) for v in raw.flat)
+            if raw.dtype.kind in "US" or (  # text ("3" would be read as 3)
+                raw.dtype.kind == "O" and any(isinstance(v, (str, bytes)) for v in raw.flat)
             ):
                 raise TypeError
             column = raw.astype(np.float64)
