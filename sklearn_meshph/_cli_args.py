@@ -367,9 +367,19 @@ def check_pipeline(pipeline) -> None:
     """Check every parameter of the library's estimators in ``pipeline`` against their
     declared constraints, and the checks their ``fit`` adds (``_check_params``: a heat
     signature's times in range, a resolution's length...), as their ``fit`` does."""
+    eigen = pipeline.named_steps.get("eigen") if hasattr(pipeline, "named_steps") else None
+    solved = None if eigen is None else eigen.get_params().get("n_eigenpairs")
     for estimator in _estimators(pipeline):
         if not type(estimator).__module__.startswith(__package__ + "."):
             continue
+        needed = estimator.get_params().get("n_eigenpairs") if estimator is not eigen else None
+        if isinstance(solved, int) and isinstance(needed, int) and needed > solved:
+            # known now, found by fit only after every sample's eigensolve
+            raise ValueError(
+                f"{type(estimator).__name__}(n_eigenpairs={needed}) needs {needed} "
+                f"eigenpairs and the eigen stage solves {solved}: raise eigen__n_eigenpairs "
+                "(--n-eigenpairs) or lower it"
+            )
         if callable(getattr(estimator, "_check_params", None)):
             estimator._check_params()  # the constraints, then the rest
             continue

@@ -4,6 +4,7 @@ weighted combinations of several distance matrices."""
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from numbers import Real
 
@@ -203,9 +204,27 @@ class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEst
         -------
         self
         """
-        check_params(self._parameter_constraints, self.get_params(deep=False), "FeatureDistance")
+        self._check_params()
         self.features_ = validate_data(self, X, dtype=np.float64)
         return self
+
+    def _check_params(self) -> None:
+        """The constraints, and a named metric tried on six rows: an unknown name, or
+        one that needs arguments (``"mahalanobis"``), failed only at ``transform``
+        (the main job's status 1 after the eigen stage, not 2 before loading)."""
+        check_params(self._parameter_constraints, self.get_params(deep=False), "FeatureDistance")
+        if isinstance(self.metric, str):
+            rows = np.array([[0.0, 1, 2], [1, 0, 3], [2, 2, 1], [3, 1, 0], [1, 3, 2], [0, 2, 3]])
+            try:
+                with warnings.catch_warnings(), np.errstate(all="ignore"):
+                    warnings.simplefilter("ignore")
+                    feature_distances(rows[:4], rows, self.metric)  # Y given, as transform
+            except (ValueError, TypeError) as exc:
+                reason = " ".join(str(exc).split())
+                reason = reason if len(reason) <= 160 else reason[:160] + "..."
+                raise ValueError(
+                    f"FeatureDistance: metric {self.metric!r} cannot be computed: {reason}"
+                ) from None
 
     def transform(self, X):
         """Distances from each row of ``X`` to each fitted row.

@@ -141,6 +141,9 @@ def no_computation(monkeypatch):
         (["--set", "distance__weights=[1, 2]"], "weights holds 2 numbers for 4 parts"),
         (["--set", "distance__weights=[0, 0, 0, 0]"], "weights are all 0"),
         (["--set", "distance__ord1__distance__order=inf"], "order=inf with a finite internal_p"),
+        (["--set", "distance__dna__distance__metric=nope"], "metric 'nope' cannot be computed"),
+        (["--set", "distance__dna__distance__metric=mahalanobis"], "'VI' parameter is required"),
+        (["--n-eigenpairs", "10"], "ShapeDNA(n_eigenpairs=48) needs 48 eigenpairs and the eigen"),
         (["--set", "eigen__eigen_index=()", "--preset", "eigenfunctions"], "eigen_index must"),
     ],
 )

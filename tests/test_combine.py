@@ -334,3 +334,13 @@ def test_feature_distances_of_rows_near_the_largest_float():
         FeatureDistance("sqeuclidean").fit_transform([[1e160], [1e160], [0.0]])
     with pytest.raises(ValueError, match="euclidean distance to fitted sample 1 is beyond"):
         FeatureDistance("euclidean").fit_transform([[1.7e308, 0.0], [-1.7e308, 0.0]])
+
+
+def test_a_feature_metric_that_cannot_be_computed_is_refused_at_fit():
+    # An unknown name, or one that needs arguments, failed only at transform.
+    X = np.random.default_rng(0).random((5, 3))
+    for metric, message in (("nope", "metric 'nope' cannot be computed"), ("seuclidean", "'V'")):
+        with pytest.raises(ValueError, match=message):
+            FeatureDistance(metric=metric).fit(X)
+    assert FeatureDistance(metric="chebyshev").fit(X).transform(X).shape == (5, 5)
+
