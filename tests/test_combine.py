@@ -343,4 +343,3 @@ def test_a_feature_metric_that_cannot_be_computed_is_refused_at_fit():
         with pytest.raises(ValueError, match=message):
             FeatureDistance(metric=metric).fit(X)
     assert FeatureDistance(metric="chebyshev").fit(X).transform(X).shape == (5, 5)
-
