@@ -239,8 +239,8 @@ def check_options(args) -> None:
         raise UsageError(f"--n-per-class {args.n_per_class} is smaller than --folds {args.folds}")
     if args.path is None and args.n_per_class * len(SHAPE_CLASSES) > MAX_SHAPES:
         raise UsageError(
-            f"--n-per-class {args.n_per_class} makes more than the {MAX_SHAPES} built-in "
-            f"shapes make_shapes makes ({len(SHAPE_CLASSES)} classes)"
+            f"--n-per-class {args.n_per_class} for {len(SHAPE_CLASSES)} classes is more than "
+            f"the {MAX_SHAPES} built-in shapes a run may make (MAX_SHAPES)"
         )
     if args.n_jobs == 0:
         raise UsageError("--n-jobs must not be 0 (use -1 for all cores)")
@@ -256,6 +256,8 @@ def _check_memory(memory: str) -> None:
     if not memory.strip():
         raise UsageError(f"--memory must name a folder, got {memory!r}")
     path = Path(memory)
+    if path.is_symlink() and not path.exists():
+        raise UsageError(f"--memory {memory!r} is a symbolic link to nothing")
     existing = path
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent

@@ -95,6 +95,8 @@ def _diagrams_to_plot(diagram) -> list[np.ndarray]:
         place = f"diagram {k}" if several else "the diagram"
         if d.size == 0:
             d = d.reshape(0, 2)
+        elif d.shape == (2,):  # one (birth, death) point
+            d = d.reshape(1, 2)
         elif d.ndim != 2 or d.shape[1] != 2:
             raise ValueError(f"{place} must have shape (n, 2) (birth, death), got {d.shape}")
         nan = np.flatnonzero(np.isnan(d).any(axis=1))
@@ -146,6 +148,8 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
             f"and {labels.shape}"
         )
     n_names = 0 if target_names is None else len(target_names)
+    if labels.dtype.kind == "f" and np.array_equal(labels, np.round(labels)):
+        labels = labels.astype(np.int64)  # 0.0, 1.0... as a classifier may return them
     if labels.size and (
         labels.dtype.kind not in "iu" or labels.min() < 0 or (n_names and labels.max() >= n_names)
     ):

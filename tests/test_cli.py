@@ -134,7 +134,7 @@ def no_computation(monkeypatch):
         # beyond the declared constraints, the checks fit adds (they were status 1, after
         # the samples were generated)
         (["--set", "eigen__times=[1e-300]"], "times must be finite and between 1e-150"),
-        (["--n-per-class", "1000000000"], "--n-per-class 1000000000 makes more than the"),
+        (["--n-per-class", "1000000000"], "--n-per-class 1000000000 for 6 classes is more"),
         # an option that would do nothing: the default's signature uses no eigenfunction
         (["--eigen-index", "2"], "the signature 'log-hks' does not use"),
         (["--set", 'distance__weights={"zzz": 1}'], "weights name unknown parts ['zzz']"),
@@ -773,6 +773,13 @@ def test_the_module_run_is_read_from_the_interpreters_options(options, module):
     from sklearn_meshph._interrupt import _module_run
 
     assert _module_run(options) == module
+
+
+def test_a_memory_link_to_nothing_is_refused(tmp_path, capfd, no_computation):
+    (tmp_path / "cache").symlink_to(tmp_path / "gone")
+    argv = ["--memory", str(tmp_path / "cache"), "--output", str(tmp_path / "o")]
+    assert main([*FAST, "--folds", "2", "--n-per-class", "2", *argv]) == 2
+    assert "is a symbolic link to nothing" in _one_error_line(capfd)
 
 
 def test_an_empty_output_name_is_refused_not_the_current_folder(tmp_path, capfd, monkeypatch):

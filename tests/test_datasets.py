@@ -186,6 +186,10 @@ def test_plots_are_written(tmp_path):
             plotting.plot_embedding(points, labels, target_names=["x", "y", "z"])
     with pytest.raises(ValueError, match=r"embedding must have shape \(n, 2\)"):
         plotting.plot_embedding(np.zeros((2, 3)), [0, 1])
+    # whole floats are labels (as a classifier may return them); one pair is one point
+    assert len(plotting.plot_embedding(points, [0.0, 1.0], ax=fig.subplots()).collections) == 2
+    single = plotting.plot_diagram(np.array([0.0, 1.0]), ax=fig.subplots())
+    assert len(single.collections[0].get_offsets()) == 1
     ax.figure.savefig(tmp_path / "embedding.png")
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("diagrams.png", "mesh.png"))
     import matplotlib.pyplot as plt

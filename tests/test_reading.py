@@ -802,3 +802,21 @@ def test_the_text_bound_sees_what_trimesh_parses(tmp_path, monkeypatch):
     tokens, lines = reading.count_text(separated.encode())
     assert tokens >= 18_004 and lines >= 12_001  # what str.split and splitlines find
     assert reading.count_text("v 1\u00a02\u00a03".encode())[0] == 4  # no-break spaces
+
+
+@pytest.mark.parametrize("scan", [7, 1 << 20])
+def test_the_long_line_scan_counts_each_line_without_its_end(monkeypatch, scan):
+    """A line of exactly the limit passes wherever it is (the scan counted the previous
+    line's end in every line after the first); one byte more is found at its start."""
+    from sklearn_meshph.mesh import text
+
+    monkeypatch.setattr(text, "_SCAN", scan)  # lines across blocks, and within one
+    limit = 10
+    for content, expected in [
+        (b"a" * 10 + b"\n" + b"b" * 10 + b"\n" + b"c" * 10, None),
+        (b"a" * 10 + b"\r\n" + b"b" * 10 + b"\r" + b"c" * 10, None),
+        (b"a" * 10 + b"\n" + b"b" * 11 + b"\n", 11),
+        (b"a\r\n" + b"c" * 11, 3),
+        (b"c" * 11, 0),
+    ]:
+        assert text.long_line_offset(content, limit) == expected, content

@@ -21,10 +21,10 @@ def long_line_offset(content: bytes, limit: int, start: int = 0) -> int | None:
         chunk = data[first : first + _SCAN]
         ends = np.flatnonzero((chunk == 10) | (chunk == 13)) + first
         if len(ends):
-            lengths = np.diff(ends, prepend=line_start)
-            long = np.flatnonzero(lengths > limit)
+            starts = np.r_[line_start, ends[:-1] + 1]
+            long = np.flatnonzero(ends - starts > limit)
             if len(long):
-                return int(ends[long[0]] - lengths[long[0]])
+                return int(starts[long[0]])
             line_start = int(ends[-1]) + 1
         if first + len(chunk) - line_start > limit:
             return line_start
