@@ -4,12 +4,14 @@ feature parts)."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.spatial.distance import cdist
 from sklearn.metrics import pairwise_distances
 from sklearn.preprocessing import normalize
 
-__all__ = ["feature_distances"]
+__all__ = ["check_metric", "feature_distances"]
 
 #: scikit-learn's metrics computed through products of matrices: a pair's value then
 #: depends on the other rows computed with it (a sample's distance to itself 0 in one
@@ -47,3 +49,22 @@ def feature_distances(X, Y, metric, n_jobs=None) -> np.ndarray:
         similarity = np.einsum("id,jd->ij", unit(X), unit(Y))
         return np.clip(1.0 - similarity, 0.0, 2.0)
     return pairwise_distances(X, Y, metric=metric, n_jobs=n_jobs)
+
+
+def check_metric(metric, owner: str) -> None:
+    """Refuse a named ``metric`` that :func:`feature_distances` cannot compute, tried on
+    six rows against four (as ``transform`` calls it, ``Y`` given): an unknown name, or
+    one that needs arguments (``"mahalanobis"``, ``"seuclidean"``), failed only at
+    ``transform`` (the main job's status 1 after the eigen stage, not 2 before loading).
+    A callable is the user's, not tried."""
+    if not isinstance(metric, str):
+        return
+    rows = np.array([[0.0, 1, 2], [1, 0, 3], [2, 2, 1], [3, 1, 0], [1, 3, 2], [0, 2, 3]])
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            feature_distances(rows[:4], rows, metric)
+    except (ValueError, TypeError) as exc:
+        reason = " ".join(str(exc).split())
+        reason = reason if len(reason) <= 160 else reason[:160] + "..."
+        raise ValueError(f"{owner}: metric {metric!r} cannot be computed: {reason}") from None

@@ -4,7 +4,6 @@ weighted combinations of several distance matrices."""
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping, Sequence
 from numbers import Real
 
@@ -16,7 +15,7 @@ from sklearn.utils import get_tags
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import median_scale
-from ._feature_distances import feature_distances
+from ._feature_distances import check_metric, feature_distances
 from ._param_validation import N_JOBS, Interval, Options, check_params
 from .diagrams.pairwise import PairwiseTransformer, fit_transform_plan, run_plans, transform_plan
 from .persistence import LowerStarPersistence
@@ -209,22 +208,8 @@ class FeatureDistance(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEst
         return self
 
     def _check_params(self) -> None:
-        """The constraints, and a named metric tried on six rows: an unknown name, or
-        one that needs arguments (``"mahalanobis"``), failed only at ``transform``
-        (the main job's status 1 after the eigen stage, not 2 before loading)."""
         check_params(self._parameter_constraints, self.get_params(deep=False), "FeatureDistance")
-        if isinstance(self.metric, str):
-            rows = np.array([[0.0, 1, 2], [1, 0, 3], [2, 2, 1], [3, 1, 0], [1, 3, 2], [0, 2, 3]])
-            try:
-                with warnings.catch_warnings(), np.errstate(all="ignore"):
-                    warnings.simplefilter("ignore")
-                    feature_distances(rows[:4], rows, self.metric)  # Y given, as transform
-            except (ValueError, TypeError) as exc:
-                reason = " ".join(str(exc).split())
-                reason = reason if len(reason) <= 160 else reason[:160] + "..."
-                raise ValueError(
-                    f"FeatureDistance: metric {self.metric!r} cannot be computed: {reason}"
-                ) from None
+        check_metric(self.metric, "FeatureDistance")
 
     def transform(self, X):
         """Distances from each row of ``X`` to each fitted row.

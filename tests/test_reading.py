@@ -29,6 +29,23 @@ def sphere():
     return trimesh.creation.icosphere(2)
 
 
+def traced_peak(call, refused=None):
+    """``(result, peak)``: what ``call()`` returns and the peak of the memory it
+    allocates through NumPy and Python (tracemalloc); with ``refused``, the call must
+    raise a ``ValueError`` matching it (the result is then None)."""
+    tracemalloc.start()
+    try:
+        if refused is None:
+            result = call()
+        else:
+            result = None
+            with pytest.raises(ValueError, match=refused):
+                call()
+        return result, tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
 def write(path, mesh):
     mesh.export(path)
     return path
@@ -108,14 +125,8 @@ def test_a_header_claiming_too_many_vertices_fails_fast(tmp_path, compression):
     path.write_text("OFF\n100000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
     if compression:
         path = compress(path, compression)
-    tracemalloc.start()
     start = time.perf_counter()
-    try:
-        with pytest.raises(ValueError, match=r"liar\.off"):
-            check_mesh(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    _, peak = traced_peak(lambda: check_mesh(path), r"liar\.off")
     assert time.perf_counter() - start < 5.0
     assert peak < 50 * 2**20  # 1e8 vertices would be 2.4 GB
 
@@ -154,13 +165,7 @@ def test_a_compression_bomb_is_refused(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match=r"bomb\.off\.gz.* decompresses to more than 1048576"):
         read_mesh_file(bomb, max_decompressed_size=2**20)
     monkeypatch.setattr(reading, "MAX_DECOMPRESSED_SIZE", 2**20)
-    tracemalloc.start()
-    try:
-        with pytest.raises(ValueError, match=r"^mesh: .*bomb\.off\.gz.* more than"):
-            check_mesh(bomb)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    _, peak = traced_peak(lambda: check_mesh(bomb), r"^mesh: .*bomb\.off\.gz.* more than")
     assert peak < 16 * 2**20
     root = tmp_path / "folder"
     (root / "a").mkdir(parents=True)
@@ -427,12 +432,7 @@ def test_text_point_cloud_peak_memory_within_twice_the_file(tmp_path, compressio
     size = path.stat().st_size
     if compression:
         path = compress(path, compression)
-    tracemalloc.start()
-    try:
-        loaded = read_point_cloud_file(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    loaded, peak = traced_peak(lambda: read_point_cloud_file(path))
     np.testing.assert_allclose(loaded, points, atol=1e-6)
     assert peak <= 2 * size, (peak, size)
 
@@ -633,12 +633,7 @@ def test_hostile_off_content_takes_the_memory_of_the_mesh(tmp_path):
     text = b"OFF\n%d %d 0\n" % (n, n) + b"0 0 0\n" * n + b"3 0 0 0\n" * n
     path = tmp_path / "dense.off.gz"
     path.write_bytes(gzip.compress(text))
-    tracemalloc.start()
-    try:
-        mesh = read_mesh_file(path, allow_points=True)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    mesh, peak = traced_peak(lambda: read_mesh_file(path, allow_points=True))
     assert mesh.faces.shape == (n, 3)
     arrays = mesh.vertices.nbytes + mesh.faces.nbytes  # 3.4 times the text here
     # The content and one copy, the arrays, a block of lines (trimesh's: 40 x the text).
@@ -657,21 +652,15 @@ def test_a_text_mesh_with_a_line_beyond_the_limit_is_refused_before_parsing(tmp_
     """One long line passed the value and line counts, and trimesh copied it several
     times (a 291 KB .obj.gz of a 300 MB line of spaces took 890 MB)."""
     mesh = trimesh.creation.icosphere(1)
-    text = mesh.export(file_type="obj") if kind == "obj" else None
     if kind == "obj":
-        content = b"# " + b" " * 30_000_000 + b"\n" + text.encode()
+        content = b"# " + b" " * 30_000_000 + b"\n" + mesh.export(file_type="obj").encode()
     else:
         ply = mesh.export(file_type="ply", encoding="ascii")
         content = ply.replace(b"end_header\n", b"comment " + b" " * 30_000_000 + b"\nend_header\n")
     path = tmp_path / f"long.{kind}.gz"
     path.write_bytes(gzip.compress(content))
-    tracemalloc.start()
-    try:
-        with pytest.raises(ValueError, match=r"has a line longer than \d+ bytes \(MAX_TEXT_LINE\)"):
-            read_mesh_file(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    refused = r"has a line longer than \d+ bytes \(MAX_TEXT_LINE\)"
+    _, peak = traced_peak(lambda: read_mesh_file(path), refused)
     assert peak < 1.5 * len(content) + 32 * 2**20
 
 
@@ -741,14 +730,8 @@ def test_a_ply_cut_short_is_refused(tmp_path, encoding):
 def test_hostile_off_files_are_refused_before_they_cost(tmp_path, content, message):
     path = tmp_path / "hostile.off.gz"
     path.write_bytes(gzip.compress(content))
-    tracemalloc.start()
     start = time.perf_counter()
-    try:
-        with pytest.raises(ValueError, match=message):
-            read_mesh_file(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    _, peak = traced_peak(lambda: read_mesh_file(path), message)
     # The decompressed content, read in place (a copy would be 2x: the old reader's)
     assert peak < 1.3 * len(content) + 32 * 2**20
     assert time.perf_counter() - start < 20
