@@ -330,14 +330,22 @@ def check_output(output: Path) -> None:
         ) from None
 
 
-def check_folds(y, class_names, folds: int, neighbors: int, random_state) -> None:
+def check_folds(
+    y, class_names, folds: int, neighbors: int, random_state, graphs: bool = False
+) -> None:
     """Every class at least ``folds`` samples, and ``neighbors`` at most the smallest
-    training fold of the stratified split; at least two classes."""
+    training fold of the stratified split; at least two classes (``graphs``: the labels
+    of a TU dataset, not sub-folders, make the classes)."""
     counts = np.bincount(y, minlength=len(class_names))
     if np.count_nonzero(counts) < 2:
+        where = (
+            "a TU dataset whose graph labels take at least two values"
+            if graphs
+            else "a folder with one sub-folder per class (at least two)"
+        )
         raise UsageError(
             f"the data holds one class ({class_names[int(np.argmax(counts))]!r}): there is "
-            "nothing to classify; give a folder with one sub-folder per class (at least two)"
+            f"nothing to classify; give {where}"
         )
     small = [(str(n), int(c)) for n, c in zip(class_names, counts, strict=True) if c < folds]
     if small:

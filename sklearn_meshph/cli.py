@@ -335,7 +335,7 @@ def _from_tu_folder(args):
         raise DataError(one_line(exc)) from None
     values, y = np.unique(labels, return_inverse=True)
     class_names = [str(v) for v in values]
-    check_folds(y, class_names, args.folds, args.neighbors, args.random_state)
+    check_folds(y, class_names, args.folds, args.neighbors, args.random_state, graphs=True)
     check_output(args.output)
     filenames = [f"graph {k}" for k in range(1, len(graphs) + 1)]
     source = f"TU dataset {names[0]} ({args.path})"

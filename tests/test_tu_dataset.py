@@ -311,6 +311,10 @@ def test_bad_tu_folders_are_one_line_in_the_main_job(tmp_path, capfd, graph_pres
     assert "holds several TU datasets (OTHER, TOY); give the folder of one" in _error_line(capfd)
     assert main([str(write_tu(tmp_path / "few", _toy(6), name="TOY")), *argv, "--folds", "4"]) == 2
     assert "fewer samples than --folds 4" in _error_line(capfd)
+    # one label: the classes are the labels' values, not sub-folders
+    one = {**_toy(), "graph_labels": "1\n" * 16}
+    assert main([str(write_tu(tmp_path / "one", one, name="TOY")), *argv]) == 2
+    assert "give a TU dataset whose graph labels take at least two" in _error_line(capfd)
     assert not (tmp_path / "out").exists()
 
 
