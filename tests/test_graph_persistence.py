@@ -207,6 +207,13 @@ def test_bad_input_is_named():
         extended_persistence(square, [0.0, np.inf, -np.inf, 1.0])
     with pytest.raises(ValueError, match="graph: values must be a numeric array"):
         extended_persistence(square, ["a", "b", "c", "d"])
+    # text that reads as numbers, None, and None among numbers were taken as numbers or
+    # NaN ("got (1,)" for None); an object array of numbers is numbers
+    for bad in (["1", "2", "3", "4"], None, [0.0, None, 1.0, 2.0]):
+        with pytest.raises(ValueError, match="graph: values must be a numeric array of 4"):
+            extended_persistence(square, bad)
+    as_objects = extended_persistence(square, np.array([0, 3, 1, 2], dtype=object))
+    np.testing.assert_array_equal(as_objects["ext1"], [[3.0, 0.0]])
     with pytest.raises(TypeError, match="graph: values must be real numbers, got complex"):
         extended_persistence(square, np.arange(4) + 5j)
     huge = extended_persistence(square, [1e308, 1e308, 0.0, 1e308])

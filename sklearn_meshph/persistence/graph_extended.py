@@ -377,18 +377,42 @@ def _all_finite(values):
     return True
 
 
+def _numeric(values) -> bool:
+    """Whether ``values`` hold numbers only, not text nor None (an array of numbers
+    answers at once)."""
+    if isinstance(values, np.ndarray) and values.dtype.kind in "biuf":
+        return True
+    try:
+        array = np.asarray(values, dtype=object)
+    except (ValueError, TypeError):  # ragged: refused as a shape by check_values
+        return True
+    return not any(v is None or isinstance(v, (str, bytes)) for v in array.flat)
+
+
+def _shown(values) -> str:
+    text = repr(values)
+    return text if len(text) <= 60 else text[:60] + "..."
+
+
 def _node_values(values, n_nodes: int) -> np.ndarray:
     """``values`` as a contiguous finite float64 ``(n_nodes,)`` array, or the error of
     :func:`~sklearn_meshph.mesh.validation.check_values` (with less overhead: graphs are
     small)."""
     if np.iscomplexobj(values):  # NumPy would drop the imaginary part with a warning
         raise TypeError("graph: values must be real numbers, got complex ones")
+    kind = values.dtype.kind if isinstance(values, np.ndarray) else None
+    if values is None or kind in ("U", "S") or not _numeric(values):
+        # None became one NaN, text such as "3" a number, None inside a list a NaN (a
+        # ValueError, as check_values gives for meshes)
+        raise ValueError(
+            f"graph: values must be a numeric array of {n_nodes} numbers, got {_shown(values)}"
+        )
     try:
         array = np.ascontiguousarray(values, dtype=np.float64)
     except (ValueError, TypeError):
         return check_values(values, n_nodes, "graph")  # raises, naming the problem
     if array.shape != (n_nodes,):
-        raise ValueError(f"values must have shape ({n_nodes},), got {array.shape}")
+        raise ValueError(f"graph: values must have shape ({n_nodes},), got {array.shape}")
     if not _all_finite(array):
         raise ValueError("graph: values contain NaN or inf")
     return array
