@@ -154,10 +154,12 @@ def plot_embedding(embedding, labels, target_names=None, ax=None):
         labels.dtype.kind not in "iu" or labels.min() < 0 or (n_names and labels.max() >= n_names)
     ):
         # -1 took the last name; text failed deep in NumPy.
+        found = np.unique(labels)
+        shown = ", ".join(map(repr, found[:5].tolist())) + (", ..." if len(found) > 5 else "")
         raise ValueError(
             "labels must be integers from 0"
             + (f" to {n_names - 1} (indices of target_names)" if n_names else "")
-            + f", got {np.unique(labels)[:5].tolist()}..."
+            + f", got {shown}"
         )
     ax = _axes(ax)
     classes = np.unique(labels)

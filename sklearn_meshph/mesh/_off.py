@@ -51,8 +51,8 @@ MAX_LINE_LENGTH = (MAX_FACE_CORNERS + 16) * (MAX_VALUE_LENGTH + 1)
 
 class _Lines:
     """The content lines of an OFF file (comments cut, blank lines skipped), with the
-    number of the file line each came from. A line ends at ``\n``, ``\r\n`` or a lone
-    ``\r`` (as trimesh and Python read them); no copy of the file is made (``read_off``
+    number of the file line each came from. A line ends at ``\\n``, ``\\r\\n`` or a lone
+    ``\\r`` (as trimesh and Python read them); no copy of the file is made (``read_off``
     refuses a line longer than ``MAX_LINE_LENGTH`` first). Lines are split into at most
     the tokens asked for, so a long line costs its own bytes, not a Python object per
     value."""
@@ -70,7 +70,7 @@ class _Lines:
         self.where = where
 
     def count(self) -> int:
-        """The line ends of the whole file (``\r\n`` once), as if none was read yet."""
+        """The line ends of the whole file (``\\r\\n`` once), as if none was read yet."""
         data, start = self._data, self._start
         ends = data.count(b"\n", start)
         if data.find(b"\r", start) >= 0:
