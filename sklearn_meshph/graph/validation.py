@@ -32,7 +32,7 @@ import scipy.sparse as sp
 
 from ..mesh.validation import where
 
-__all__ = ["Graph", "check_graph", "is_graph"]
+__all__ = ["Graph", "check_graph", "holds_text", "is_graph"]
 
 # Relative difference tolerated between a[i, j] and a[j, i] of a symmetric adjacency.
 _SYMMETRY_RTOL = 1e-10
@@ -82,24 +82,34 @@ def _edge_array(edges, place: str) -> np.ndarray:
     return array.astype(np.int64, copy=False)
 
 
+def holds_text(values, none: bool = False) -> bool:
+    """Whether ``values`` (an array or a sequence) hold text, which
+    ``np.asarray(..., float64)`` reads as numbers ("3" as 3.0), or with ``none`` a None
+    (read as NaN). Booleans are numbers, 0 and 1, as scikit-learn reads them (a sparse
+    boolean adjacency, one-hot node attributes). A ragged sequence is not looked into."""
+    if isinstance(values, np.ndarray) and values.dtype.kind in "biuf":
+        return False
+    try:
+        raw = values if isinstance(values, np.ndarray) else np.asarray(values, dtype=object)
+    except (ValueError, TypeError):
+        return False
+    if raw.dtype.kind in "US":
+        return True
+    kinds = (str, bytes, type(None)) if none else (str, bytes)
+    return raw.dtype.kind == "O" and any(isinstance(v, kinds) for v in raw.flat)
+
+
 def _numbers_only(values, what: str, place: str) -> None:
-    """Refuse text, which ``np.asarray(..., float64)`` reads as numbers ("3" as 3.0), so
-    that every form of a graph takes the same values. Booleans are 0 and 1, as
-    scikit-learn reads them (a sparse boolean adjacency, one-hot node attributes)."""
-    raw = np.asarray(values, dtype=object) if not isinstance(values, np.ndarray) else values
-    if raw.dtype.kind in "US" or (
-        raw.dtype.kind == "O" and any(isinstance(v, (str, bytes)) for v in raw.flat)
-    ):
+    """Refuse text (:func:`holds_text`), so that every form of a graph takes the same
+    values."""
+    if holds_text(values):
         raise TypeError(f"{place}: {what} must be numbers, not text")
 
 
 def _check_node_values(values, n_nodes: int, place: str):
     if values is None:
         return None
-    try:
-        _numbers_only(values, "node values", place)
-    except ValueError:  # ragged: refused below as a shape
-        pass
+    _numbers_only(values, "node values", place)
     try:
         values = np.asarray(values, dtype=np.float64)
     except OverflowError:  # an int beyond float64
@@ -150,10 +160,7 @@ class Graph:
         place = "graph"
         n_nodes = _n_nodes(self.n_nodes, place)
         edges = _edge_array(self.edges, place)
-        try:
-            _numbers_only(self.weights, "edge weights", place)
-        except ValueError:  # ragged: refused below
-            pass
+        _numbers_only(self.weights, "edge weights", place)
         weights = np.asarray(self.weights, dtype=np.float64).reshape(-1)
         if len(weights) != len(edges):
             raise ValueError(f"{place}: {len(edges)} edges but {len(weights)} weights")
@@ -261,9 +268,7 @@ def _networkx_node_values(data: list[dict], place: str):
             raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
         try:
             raw = np.array([d[key] for d in data])
-            if raw.dtype.kind in "US" or (  # text ("3" would be read as 3)
-                raw.dtype.kind == "O" and any(isinstance(v, (str, bytes)) for v in raw.flat)
-            ):
+            if holds_text(raw):  # "3" would be read as 3
                 raise TypeError
             column = raw.astype(np.float64)
         except OverflowError:  # an int beyond float64

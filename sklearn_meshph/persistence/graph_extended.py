@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..graph.validation import Graph
+from ..graph.validation import Graph, holds_text
 from ..inputs import check_input
 from ..mesh.graph import find_root
 from ..mesh.validation import check_values
@@ -377,18 +377,6 @@ def _all_finite(values):
     return True
 
 
-def _numeric(values) -> bool:
-    """Whether ``values`` hold numbers only, not text nor None (an array of numbers
-    answers at once)."""
-    if isinstance(values, np.ndarray) and values.dtype.kind in "biuf":
-        return True
-    try:
-        array = np.asarray(values, dtype=object)
-    except (ValueError, TypeError):  # ragged: refused as a shape by check_values
-        return True
-    return not any(v is None or isinstance(v, (str, bytes)) for v in array.flat)
-
-
 def _shown(values) -> str:
     text = repr(values)
     return text if len(text) <= 60 else text[:60] + "..."
@@ -400,8 +388,7 @@ def _node_values(values, n_nodes: int) -> np.ndarray:
     small)."""
     if np.iscomplexobj(values):  # NumPy would drop the imaginary part with a warning
         raise TypeError("graph: values must be real numbers, got complex ones")
-    kind = values.dtype.kind if isinstance(values, np.ndarray) else None
-    if values is None or kind in ("U", "S") or not _numeric(values):
+    if values is None or holds_text(values, none=True):
         # None became one NaN, text such as "3" a number, None inside a list a NaN (a
         # ValueError, as check_values gives for meshes)
         raise ValueError(
