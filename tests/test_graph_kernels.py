@@ -288,7 +288,12 @@ def test_kernel_sum_on_fewer_samples_than_folds_leaves_one_out():
     assert KernelSumSVC(bandwidth=1e-100).fit(stack, y).score(stack, y) == 1.0
     # ... and so did a small bandwidth with small distances: 2 bandwidth^2 times their
     # median underflowed to 0, and 0 / -0.0 on the diagonal is NaN.
-    tiny = KernelSumSVC(bandwidth=1e-100).fit(stack * 1e-200, y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # far pairs overflow to a kernel of 0, silently
+        tiny = KernelSumSVC(bandwidth=1e-100).fit(stack * 1e-200, y)
+        far = stack.copy()
+        far[0, -1] = far[-1, 0] = 1e3 * stack.max()  # many medians away
+        KernelSumSVC(bandwidth=1.5e-154).fit(far, y)
     kernels = tiny._kernels(stack * 1e-200)
     assert np.isfinite(kernels).all() and (np.diagonal(kernels, axis1=0, axis2=1) == 1).all()
     assert tiny.score(stack * 1e-200, y) == 1.0

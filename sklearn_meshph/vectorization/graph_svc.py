@@ -173,8 +173,9 @@ class KernelSumSVC(ClassifierScoreMixin, BaseEstimator):
             # d / m first, then / (2 bandwidth^2): the product 2 bandwidth^2 m underflows
             # to 0 for a small bandwidth and small distances (0 / -0.0 is NaN). With the
             # default bandwidth of 1 the two orders give the same bits (powers of two).
-            scaled = X[start : start + rows] / self.scales_
-            scaled /= -2.0 * self.bandwidth**2
+            with np.errstate(over="ignore"):  # far pairs at a tiny bandwidth: -inf, kernel 0
+                scaled = X[start : start + rows] / self.scales_
+                scaled /= -2.0 * self.bandwidth**2
             out[start : start + rows] = np.exp(scaled, out=scaled) @ average
         return out
 
