@@ -12,6 +12,7 @@ triangulated, within 1% once the far arm is left out.
 import numpy as np
 import pytest
 import scipy.linalg
+import scipy.sparse
 
 from sklearn_meshph import point_cloud_laplacian
 from sklearn_meshph.mesh.graph import connected_components
@@ -180,3 +181,46 @@ def test_wide_neighbourhoods_fit_their_planes_and_quadrics_locally(n_neighbors):
     assert abs(M.sum() / (4 * np.pi) - 1) < 0.01
     values = scipy.linalg.eigh(L.toarray(), M.toarray(), eigvals_only=True)[1:4]
     np.testing.assert_allclose(values, 2.0, rtol=0.02)  # l(l + 1) for l = 1
+
+
+def _scipy_cotangent(n, triangles, a, b):
+    """The cotangent stiffness and lumped mass of measured triangles, by scipy's sparse
+    sums (the compiled assembly's oracle)."""
+    double_area = np.linalg.norm(np.cross(a, b), axis=1)
+    opposite_i = (a * b).sum(1) / double_area
+    opposite_j = (a * (a - b)).sum(1) / double_area
+    opposite_k = (b * (b - a)).sum(1) / double_area
+    i, j, k = triangles.T
+    half = np.concatenate([opposite_i, opposite_j, opposite_k]) / 2
+    rows, cols = np.concatenate([j, i, i]), np.concatenate([k, k, j])
+    weights = scipy.sparse.coo_matrix((half, (rows, cols)), shape=(n, n)).tocsr()
+    weights = weights + weights.T
+    L = scipy.sparse.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights
+    mass = np.bincount(triangles.ravel(), np.repeat(double_area / 6, 3), minlength=n)
+    return (L / 3).tocsr(), mass / 3
+
+
+@pytest.mark.parametrize("case", ["hairpin", "sheets", "right angles"])
+def test_compiled_assembly_is_the_scipy_sum_of_the_fans(case):
+    from sklearn_meshph.pointcloud._triangulation import tangent_fans
+    from sklearn_meshph.pointcloud.laplacians import cloud_operator
+
+    if case == "hairpin":
+        points = hairpin(2000, 0.1)[0]
+    elif case == "sheets":
+        points = two_sheets(800, 0.3)
+    else:  # a grid: right angles (cotangents about 0) and cocircular points
+        x, y = np.meshgrid(np.arange(20.0), np.arange(20.0))
+        points = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)]) / 19
+    L, M, triangles = cloud_operator(points)
+    expected_triangles, a, b = tangent_fans(points)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+    expected, mass = _scipy_cotangent(len(points), triangles, a, b)
+    expected.sort_indices()
+    assert L.has_sorted_indices
+    np.testing.assert_array_equal(L.indptr, expected.indptr)
+    np.testing.assert_array_equal(L.indices, expected.indices)
+    np.testing.assert_allclose(L.data, expected.data, rtol=1e-12, atol=1e-14)
+    np.testing.assert_array_equal(M.diagonal(), mass)
+    assert abs(L - L.T).max() == 0.0
+    np.testing.assert_allclose(np.asarray(L.sum(axis=1)).ravel(), 0.0, atol=1e-12)

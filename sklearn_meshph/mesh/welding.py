@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from .graph import connected_components
 
-__all__ = ["WELD_RTOL", "weld_vertices"]
+__all__ = ["WELD_RTOL", "exact_representatives", "weld_vertices"]
 
 # Vertices closer than this times the bounding-box diagonal (in every coordinate) are
 # welded. Far below any meaningful feature size, far above double rounding of a shared
@@ -22,10 +22,11 @@ __all__ = ["WELD_RTOL", "weld_vertices"]
 WELD_RTOL = 1e-10
 
 
-def _exact_representatives(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def exact_representatives(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each vertex, the lowest index of a vertex with exactly equal coordinates.
 
-    Also returns those representatives in lexicographic order of their coordinates.
+    Also returns those representatives in lexicographic order of their coordinates
+    (``-0.0`` and ``0.0`` are equal).
     """
     n = len(vertices)
     # +0.0 turns -0.0 into 0.0, so that the two zeros (equal as numbers) compare equal.
@@ -42,7 +43,7 @@ def _exact_representatives(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return rep, first
 
 
-def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL) -> np.ndarray:
+def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL, *, exact=None) -> np.ndarray:
     """Map every vertex to the vertex it is welded to.
 
     Two vertices are welded when every coordinate differs by at most
@@ -56,6 +57,8 @@ def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL) -> np.ndarray:
     rtol : float, default=WELD_RTOL
         Tolerance relative to the bounding-box diagonal; ``0`` welds exactly equal
         coordinates only.
+    exact : tuple of two ndarrays, optional
+        :func:`exact_representatives` of ``vertices``, when the caller has it.
 
     Returns
     -------
@@ -67,7 +70,7 @@ def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL) -> np.ndarray:
     n = len(vertices)
     if n < 2:
         return np.arange(n, dtype=np.int64)
-    rep, first = _exact_representatives(vertices)
+    rep, first = exact_representatives(vertices) if exact is None else exact
     diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
     tol = rtol * diagonal
     if tol > 0 and len(first) > 1:

@@ -320,14 +320,37 @@ def tangent_fans(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, knn=Non
     fitted = min(LOCAL_NEIGHBORS, neighbors.shape[1])
     coords, lift = _lifted(points, neighbors, usable, normal, basis, first, fitted)
     fans = local_delaunay_fans(coords, usable)
-    i, ja, jb = fans[:, 0], fans[:, 1], fans[:, 2]
-    a = np.column_stack([coords[i, ja], lift[i, ja]])
-    b = np.column_stack([coords[i, jb], lift[i, jb]])
-    double_area = np.linalg.norm(np.cross(a, b), axis=1)
-    longest = np.maximum(np.maximum((a * a).sum(1), (b * b).sum(1)), ((b - a) ** 2).sum(1))
-    keep = double_area > DEGENERATE_SINE * longest
-    triangles = np.column_stack([i, neighbors[i, ja], neighbors[i, jb]])[keep]
-    return triangles, a[keep], b[keep]
+    return _measured(fans, coords, lift, neighbors, DEGENERATE_SINE)
+
+
+@numba.njit(cache=True)
+def _measured(fans, coords, lift, neighbors, min_sine):
+    """:func:`tangent_fans`'s ``(triangles, a, b)`` from the fans ``(i, a, b)`` of
+    :func:`local_delaunay_fans` (positions among the neighbours), the tangent
+    coordinates and the fitted heights: the edge vectors in the frame of ``i``, the
+    triangles numbered as points, the degenerate ones left out."""
+    m = fans.shape[0]
+    triangles = np.empty((m, 3), np.int64)
+    a = np.empty((m, 3))
+    b = np.empty((m, 3))
+    count = 0
+    for t in range(m):
+        i, ja, jb = fans[t, 0], fans[t, 1], fans[t, 2]
+        ax, ay, az = coords[i, ja, 0], coords[i, ja, 1], lift[i, ja]
+        bx, by, bz = coords[i, jb, 0], coords[i, jb, 1], lift[i, jb]
+        cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        double_area = np.sqrt(cx * cx + cy * cy + cz * cz)
+        dx, dy, dz = bx - ax, by - ay, bz - az
+        longest = max(ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
+        longest = max(longest, dx * dx + dy * dy + dz * dz)
+        if double_area > min_sine * longest:
+            triangles[count, 0] = i
+            triangles[count, 1] = neighbors[i, ja]
+            triangles[count, 2] = neighbors[i, jb]
+            a[count, 0], a[count, 1], a[count, 2] = ax, ay, az
+            b[count, 0], b[count, 1], b[count, 2] = bx, by, bz
+            count += 1
+    return triangles[:count].copy(), a[:count].copy(), b[:count].copy()
 
 
 @numba.njit(cache=True)

@@ -8,19 +8,27 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from ..mesh import DEGENERATE_SINE, unit_box
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
-from ..mesh.welding import WELD_RTOL, weld_vertices
+from ..mesh.welding import WELD_RTOL, exact_representatives, weld_vertices
 from ._triangulation import LOCAL_NEIGHBORS, nearest, nearest_within
 from .graph import canonical_order, neighbourhood_components, sparse_outliers, unique_edges
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
 
 __all__ = ["FAR_BOX_RATIO", "clean_cloud", "cloud_unit_box"]
+
+
+def _refuse_few(n_distinct: int, place: str) -> None:
+    """A ``ValueError`` naming the sample when fewer than ``MIN_POINTS`` are distinct."""
+    if n_distinct < MIN_POINTS:
+        raise ValueError(
+            f"{place}: the point cloud has {n_distinct} distinct points; at least "
+            f"{MIN_POINTS} are needed"
+        )
 
 
 def _refuse_degenerate(points: np.ndarray, place: str) -> None:
@@ -86,20 +94,16 @@ def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float]:
 #: out 13% low. A uniform sample has a pair that close about once in 100,000 points.
 NEAR_DUPLICATE = 1e-3
 REACH_NEIGHBOR = 8
-REACH_SAMPLES = 2000
 
 
-def _weld_rtol(points: np.ndarray) -> float:
+def _weld_rtol(points: np.ndarray, distances: np.ndarray) -> float:
     """The welding tolerance of a cloud, as a fraction of its box's diagonal: the
-    larger of :func:`_surface_rtol` and ``NEAR_DUPLICATE`` reaches."""
+    larger of :func:`_surface_rtol` and ``NEAR_DUPLICATE`` reaches. ``distances``:
+    :func:`._triangulation.nearest`'s distances among the distinct ``points`` (exact
+    duplicates are welded anyway), at least ``REACH_NEIGHBOR`` columns for a reach."""
     rtol = _surface_rtol(points)
-    # Among distinct points (exact duplicates are welded anyway), in sorted order (the
-    # same for any order of the input), the reach of at most REACH_SAMPLES of them.
-    distinct = np.unique(points, axis=0)
-    if len(distinct) > REACH_NEIGHBOR:
-        queries = distinct[:: max(1, len(distinct) // REACH_SAMPLES)]
-        reaches = cKDTree(distinct).query(queries, REACH_NEIGHBOR + 1)[0][:, -1]
-        reach = float(np.median(reaches))
+    if distances.shape[1] >= REACH_NEIGHBOR:
+        reach = float(np.median(distances[:, REACH_NEIGHBOR - 1]))
         diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
         rtol = max(rtol, NEAR_DUPLICATE * reach / diagonal)
     return rtol
@@ -136,16 +140,16 @@ def _largest(labels: np.ndarray, area: np.ndarray, size=None) -> tuple[np.ndarra
     return labels == largest, len(area) - 1, max(share, 0.0)
 
 
-def _far_components(points, laplacian, components, place):
+def _far_components(points, knn, laplacian, components, place):
     """Drop the points far from the rest (:func:`.graph.neighbourhood_components`): the
     component of most points is kept (not of largest area: a scatter of stray points
     spans more area than the dense surface it surrounds), its operator built without
     the others; then the
     outliers of that component (:func:`.graph.sparse_outliers`), each a component of its
-    own. Returns ``(kept, L, M, triangles, n_other, share)``."""
+    own. ``knn``: the points' ``LOCAL_NEIGHBORS`` nearest. Returns
+    ``(kept, L, M, triangles, n_other, share)``."""
     # One neighbour search serves every step: where points are dropped, only the points
     # that lose a neighbour are searched again.
-    knn = nearest(points, LOCAL_NEIGHBORS)
     n_components, labels = neighbourhood_components(points, knn)
     build = CLOUD_LAPLACIANS[laplacian].value
     kept, operator, n_other = np.ones(len(points), dtype=bool), None, 0
@@ -252,16 +256,23 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     n_input = len(points)
     order = canonical_order(points)
     canonical = unit[order]
-    representative = weld_vertices(canonical, _weld_rtol(canonical) if weld else 0.0)
-    distinct = np.flatnonzero(representative == np.arange(n_input))
-    if len(distinct) < MIN_POINTS:
-        raise ValueError(
-            f"{place}: the point cloud has {len(distinct)} distinct points; at least "
-            f"{MIN_POINTS} are needed"
-        )
+    # One neighbour search among the distinct points serves the welding tolerance and
+    # every later step (where welding merges more, only the points that lose a
+    # neighbour are searched again).
+    exact = exact_representatives(canonical)
+    distinct = np.flatnonzero(exact[0] == np.arange(n_input))
+    _refuse_few(len(distinct), place)
+    knn = nearest(canonical[distinct], LOCAL_NEIGHBORS)
+    rtol = _weld_rtol(canonical, knn[0]) if weld else 0.0
+    representative = weld_vertices(canonical, rtol, exact=exact)
+    still = representative[distinct] == distinct
+    if not still.all():
+        knn = nearest_within(canonical[distinct], knn, still, LOCAL_NEIGHBORS)
+        distinct = distinct[still]
+        _refuse_few(len(distinct), place)
     _refuse_degenerate(_within_fences(canonical[distinct]), place)
     near, L, M, triangles, n_far, far_share = _far_components(
-        canonical[distinct], laplacian, components, place
+        canonical[distinct], knn, laplacian, components, place
     )
     solve_points = canonical[distinct[near]]
     mass = M.diagonal()

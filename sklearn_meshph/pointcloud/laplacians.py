@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from numbers import Integral
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -135,25 +136,90 @@ def cloud_operator(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, *, kn
     """
     n = len(points)
     triangles, a, b = tangent_fans(points, n_neighbors, knn)
-    double_area = np.linalg.norm(np.cross(a, b), axis=1)
-    # The cotangent of a corner is the dot product of its two edges over twice the
-    # area; an edge weighs half the cotangent of the corner opposite it.
-    at_centre = (a * b).sum(1) / double_area
-    at_a = (-a * (b - a)).sum(1) / double_area
-    at_b = (-b * (a - b)).sum(1) / double_area
-    i, j, k = triangles.T
-    weights = sp.csr_matrix(
-        (
-            np.concatenate([at_centre, at_a, at_b]) / 2,
-            (np.concatenate([j, i, i]), np.concatenate([k, k, j])),
-        ),
-        shape=(n, n),
-    )
-    weights = weights + weights.T
-    L = sp.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights
-    mass = np.bincount(triangles.ravel(), weights=np.repeat(double_area / 6, 3), minlength=n)
+    indptr, indices, data, mass = _cotangent_csr(n, triangles, a, b)
     # A triangle on which the neighbourhoods agree is in the fans of its three corners.
-    return (L / 3.0).tocsr(), sp.diags(mass / 3.0), triangles
+    L = sp.csr_matrix((data / 3.0, indices, indptr), shape=(n, n))
+    L.has_sorted_indices = True
+    return L, sp.diags(mass / 3.0), triangles
+
+
+@numba.njit(cache=True)
+def _cotangent_csr(n, triangles, a, b):
+    """The cotangent stiffness of ``triangles`` as CSR arrays ``(indptr, indices,
+    data)`` (sorted columns, entries that sum to exactly zero left out) and their
+    lumped mass (a third of each triangle's area at each corner).
+
+    Each triangle ``(i, j, k)`` is measured by its edge vectors ``a = j - i`` and
+    ``b = k - i`` in the frame of ``i``; an edge weighs half the cotangent of the
+    corner opposite it, the cotangent of a corner being the dot product of its two
+    edges over twice the area.
+    """
+    m = triangles.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for t in range(m):
+        for c in range(3):
+            start[triangles[t, c] + 1] += 2
+    for r in range(n):
+        start[r + 1] += start[r]
+    fill = start[:-1].copy()
+    columns = np.empty(6 * m, np.int64)
+    weights = np.empty(6 * m)
+    mass = np.zeros(n)
+    for t in range(m):
+        ax, ay, az = a[t, 0], a[t, 1], a[t, 2]
+        bx, by, bz = b[t, 0], b[t, 1], b[t, 2]
+        cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        double_area = np.sqrt(cx * cx + cy * cy + cz * cz)
+        at_i = (ax * bx + ay * by + az * bz) / double_area / 2.0
+        at_j = (ax * (ax - bx) + ay * (ay - by) + az * (az - bz)) / double_area / 2.0
+        at_k = (bx * (bx - ax) + by * (by - ay) + bz * (bz - az)) / double_area / 2.0
+        i, j, k = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        # Edge (j, k) is opposite i, (i, k) opposite j, (i, j) opposite k.
+        for p, q, w in ((j, k, at_i), (i, k, at_j), (i, j, at_k)):
+            columns[fill[p]], weights[fill[p]] = q, w
+            fill[p] += 1
+            columns[fill[q]], weights[fill[q]] = p, w
+            fill[q] += 1
+        for c in range(3):
+            mass[triangles[t, c]] += double_area / 6.0
+    # Each row sorted by column (insertion sort: a few dozen entries), duplicates
+    # summed, the diagonal (the row's sum) in its place.
+    indptr = np.zeros(n + 1, np.int64)
+    indices = np.empty(6 * m + n, np.int64)
+    data = np.empty(6 * m + n)
+    out = 0
+    for r in range(n):
+        lo, hi = start[r], start[r + 1]
+        for s in range(lo + 1, hi):
+            col, w = columns[s], weights[s]
+            u = s
+            while u > lo and columns[u - 1] > col:
+                columns[u], weights[u] = columns[u - 1], weights[u - 1]
+                u -= 1
+            columns[u], weights[u] = col, w
+        first = out
+        degree = 0.0
+        s = lo
+        while s < hi:
+            col, total = columns[s], weights[s]
+            s += 1
+            while s < hi and columns[s] == col:
+                total += weights[s]
+                s += 1
+            degree += total
+            if total != 0.0:
+                indices[out], data[out] = col, -total
+                out += 1
+        if degree != 0.0:  # the diagonal, before the first column above r
+            u = first
+            while u < out and indices[u] < r:
+                u += 1
+            for v in range(out, u, -1):
+                indices[v], data[v] = indices[v - 1], data[v - 1]
+            indices[u], data[u] = r, degree
+            out += 1
+        indptr[r + 1] = out
+    return indptr, indices[:out].copy(), data[:out].copy(), mass
 
 
 def _graph(points):
