@@ -209,7 +209,7 @@ def test_compiled_assembly_is_the_scipy_sum_of_the_fans(case):
         points = hairpin(2000, 0.1)[0]
     elif case == "sheets":
         points = two_sheets(800, 0.3)
-    else:  # a grid: right angles (cotangents about 0) and cocircular points
+    else:  # a grid: right angles, whose cotangents cancel exactly (entries left out)
         x, y = np.meshgrid(np.arange(20.0), np.arange(20.0))
         points = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)]) / 19
     L, M, triangles = cloud_operator(points)

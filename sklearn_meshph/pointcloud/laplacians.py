@@ -182,42 +182,43 @@ def _cotangent_csr(n, triangles, a, b):
             fill[q] += 1
         for c in range(3):
             mass[triangles[t, c]] += double_area / 6.0
-    # Each row sorted by column (insertion sort: a few dozen entries), duplicates
-    # summed, the diagonal (the row's sum) in its place.
+    # Each row's duplicates summed (in triangle order) through a slot per column,
+    # then its distinct columns sorted (insertion sort: a few dozen), the diagonal (the
+    # row's sum) in its place.
     indptr = np.zeros(n + 1, np.int64)
     indices = np.empty(6 * m + n, np.int64)
     data = np.empty(6 * m + n)
+    seen = np.full(n, -1, np.int64)  # the last row that met each column
+    slot = np.empty(n, np.int64)  # and where it went
     out = 0
     for r in range(n):
-        lo, hi = start[r], start[r + 1]
-        for s in range(lo + 1, hi):
-            col, w = columns[s], weights[s]
-            u = s
-            while u > lo and columns[u - 1] > col:
-                columns[u], weights[u] = columns[u - 1], weights[u - 1]
-                u -= 1
-            columns[u], weights[u] = col, w
         first = out
-        degree = 0.0
-        s = lo
-        while s < hi:
-            col, total = columns[s], weights[s]
-            s += 1
-            while s < hi and columns[s] == col:
-                total += weights[s]
-                s += 1
-            degree += total
-            if total != 0.0:
-                indices[out], data[out] = col, -total
+        for s in range(start[r], start[r + 1]):
+            col = columns[s]
+            if seen[col] != r:
+                seen[col], slot[col] = r, out
+                indices[out], data[out] = col, weights[s]
                 out += 1
-        if degree != 0.0:  # the diagonal, before the first column above r
-            u = first
-            while u < out and indices[u] < r:
-                u += 1
-            for v in range(out, u, -1):
-                indices[v], data[v] = indices[v - 1], data[v - 1]
-            indices[u], data[u] = r, degree
+            else:
+                data[slot[col]] += weights[s]
+        degree = 0.0
+        kept = first
+        for s in range(first, out):
+            degree += data[s]
+            if data[s] != 0.0:
+                indices[kept], data[kept] = indices[s], -data[s]
+                kept += 1
+        out = kept
+        if degree != 0.0:
+            indices[out], data[out] = r, degree
             out += 1
+        for s in range(first + 1, out):
+            col, w = indices[s], data[s]
+            u = s
+            while u > first and indices[u - 1] > col:
+                indices[u], data[u] = indices[u - 1], data[u - 1]
+                u -= 1
+            indices[u], data[u] = col, w
         indptr[r + 1] = out
     return indptr, indices[:out].copy(), data[:out].copy(), mass
 
