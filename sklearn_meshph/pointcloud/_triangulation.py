@@ -269,9 +269,9 @@ def _lifted(points, neighbors, usable, normal, basis, first, fitted):
             terms[j, 3], terms[j, 4], terms[j, 5] = x * x, x * y, y * y
             if usable[i, j] and j < fitted:
                 kept += 1
-                for r in range(6):
+                for r in range(6):  # the lower triangle: all the Cholesky reads
                     moments[r] += terms[j, r] * z
-                    for q in range(6):
+                    for q in range(r + 1):
                         gram[r, q] += terms[j, r] * terms[j, q]
         if kept < 7:
             continue
