@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from .graph import connected_components
 
-__all__ = ["WELD_RTOL", "exact_representatives", "weld_vertices"]
+__all__ = ["WELD_RTOL", "exact_representatives", "weld_groups", "weld_vertices"]
 
 # Vertices closer than this times the bounding-box diagonal (in every coordinate) are
 # welded. Far below any meaningful feature size, far above double rounding of a shared
@@ -43,7 +43,7 @@ def exact_representatives(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return rep, first
 
 
-def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL, *, exact=None) -> np.ndarray:
+def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL) -> np.ndarray:
     """Map every vertex to the vertex it is welded to.
 
     Two vertices are welded when every coordinate differs by at most
@@ -57,8 +57,6 @@ def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL, *, exact=None) 
     rtol : float, default=WELD_RTOL
         Tolerance relative to the bounding-box diagonal; ``0`` welds exactly equal
         coordinates only.
-    exact : tuple of two ndarrays, optional
-        :func:`exact_representatives` of ``vertices``, when the caller has it.
 
     Returns
     -------
@@ -67,10 +65,16 @@ def weld_vertices(vertices: np.ndarray, rtol: float = WELD_RTOL, *, exact=None) 
         ``i``; ``representative[i] == i`` for every vertex of a mesh without
         coincident vertices.
     """
+    if len(vertices) < 2:
+        return np.arange(len(vertices), dtype=np.int64)
+    return weld_groups(vertices, exact_representatives(vertices), rtol)
+
+
+def weld_groups(vertices: np.ndarray, exact, rtol: float) -> np.ndarray:
+    """:func:`weld_vertices` from ``exact``, the :func:`exact_representatives` of the
+    same ``vertices`` (at least two), for a caller that has them already."""
     n = len(vertices)
-    if n < 2:
-        return np.arange(n, dtype=np.int64)
-    rep, first = exact_representatives(vertices) if exact is None else exact
+    rep, first = exact
     diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
     tol = rtol * diagonal
     if tol > 0 and len(first) > 1:

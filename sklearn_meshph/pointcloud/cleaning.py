@@ -13,7 +13,7 @@ from ..mesh import DEGENERATE_SINE, unit_box
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
-from ..mesh.welding import WELD_RTOL, exact_representatives, weld_vertices
+from ..mesh.welding import WELD_RTOL, exact_representatives, weld_groups
 from ._triangulation import LOCAL_NEIGHBORS, nearest, nearest_within
 from .graph import canonical_order, neighbourhood_components, sparse_outliers, unique_edges
 from .laplacians import CLOUD_LAPLACIANS
@@ -264,7 +264,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     _refuse_few(len(distinct), place)
     knn = nearest(canonical[distinct], LOCAL_NEIGHBORS)
     rtol = _weld_rtol(canonical, knn[0]) if weld else 0.0
-    representative = weld_vertices(canonical, rtol, exact=exact)
+    representative = weld_groups(canonical, exact, rtol)
     still = representative[distinct] == distinct
     if not still.all():
         knn = nearest_within(canonical[distinct], knn, still, LOCAL_NEIGHBORS)
