@@ -215,7 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         type=_output_path,
         default=Path("meshph-output"),
-        help="folder for the result files and pictures (created)",
+        help="folder for the result files and pictures (created; an earlier run's result "
+        "files there are replaced or removed, nothing else is touched)",
     )
     parser.add_argument(
         "--no-plots", action="store_true", help="skip the pictures (data files are written)"

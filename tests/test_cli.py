@@ -827,3 +827,20 @@ def test_a_stage_of_one_diagram_per_sample_keeps_its_diagrams_whole():
     samples, labels = cli._diagrams([("persistence", OneDiagram(), [diagram])], 1, 1)
     assert labels == ["sublevel H0"] and len(samples[0]) == 1
     np.testing.assert_array_equal(samples[0][0], diagram)
+
+
+def test_an_earlier_runs_results_are_not_left_beside_this_ones(tmp_path):
+    from sklearn_meshph._report import RESULT_FILES
+
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in RESULT_FILES:  # an earlier run's, with pictures and diagrams
+        (out / name).write_bytes(b"earlier run")
+    (out / "notes.txt").write_text("the user's own")
+    argv = ["--n-per-class", "2", "--folds", "2", "--preset", "shape-dna", "--output", str(out)]
+    assert main([*argv, *FAST]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    # No diagrams for Shape-DNA and no pictures: only this run's files, and the user's.
+    assert sorted(summary["files"]) == ["distances.npy", "predictions.csv", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == sorted([*summary["files"], "notes.txt"])
+    assert (out / "notes.txt").read_text() == "the user's own"
