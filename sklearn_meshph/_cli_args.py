@@ -195,7 +195,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--skip-unreadable",
         action="store_true",
-        help="leave out (and list) the files that cannot be read instead of stopping",
+        help="leave out (and list) the files that cannot be read, and the samples the "
+        "eigen stage refuses (NaN coordinates, nothing left after cleaning, a cloud on a "
+        "line...), instead of stopping",
     )
     parser.add_argument("--folds", type=int, default=5, help="stratified CV folds (>= 2)")
     parser.add_argument("--neighbors", type=int, default=1, help="k of the k-NN classifier")

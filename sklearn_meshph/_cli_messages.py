@@ -60,6 +60,12 @@ class Names:
                 except ValueError:
                     self.files.append(str(f))
 
+    def subset(self, kept) -> Names:
+        """The names of the samples ``kept`` (their indices), numbered anew."""
+        subset = Names()
+        subset.files = None if self.files is None else [self.files[i] for i in kept]
+        return subset
+
     def name(self, index: int) -> str:
         if self.files is None or not 0 <= index < len(self.files):
             return f"sample {index}"

@@ -248,13 +248,15 @@ def _main(argv) -> int:
         return 1
 
 
-def compute_fields(samples, eigen, names: Names):
-    """The eigen stage on all the samples at once (it learns nothing); the fields and
-    the number of samples of each kind of warning."""
+def compute_fields(samples, eigen, names: Names, skip: bool = False):
+    """The eigen stage on all the samples at once (it learns nothing); the fields, the
+    number of samples of each kind of warning, and with ``skip`` the samples it refused
+    as ``(index, message)`` pairs (their fields None) instead of stopping."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RepeatedEigenvalueWarning)
         warnings.simplefilter("always", MeshCleaningWarning)
-        fields = _stage(names, eigen.fit_transform, samples)
+        _stage(names, eigen.fit, samples)
+        fields, refused = _stage(names, eigen._transform, samples, skip)
     counts = {
         "repeated_eigenvalue": note(
             sample_indices(caught, RepeatedEigenvalueWarning),
@@ -266,7 +268,24 @@ def compute_fields(samples, eigen, names: Names):
     for w in caught:  # others: shown once each, as Python would
         if not issubclass(w.category, (RepeatedEigenvalueWarning, MeshCleaningWarning)):
             print(f"warning: {names.message(w.message)}", file=sys.stderr)
-    return fields, counts
+    return fields, counts, refused
+
+
+def _leave_out(refused, y, class_names, names: Names, args):
+    """The indices of the samples but the ``refused`` ones (listed), the folds checked
+    again on them, and the ``(file, reason)`` pairs of the refused."""
+    print(f"left out {len(refused)} sample(s) that cannot be used:")
+    skipped = []
+    for i, message in refused:
+        file = names.files[i] if names.files is not None else f"sample {i}"
+        skipped.append((file, names.message(message)))
+        print(wrap(f"  {printable(skipped[-1][1])}"))
+    gone = {i for i, _ in refused}
+    kept = [i for i in range(len(y)) if i not in gone]
+    if not kept:
+        raise DataError("no sample can be used (all were left out above)")
+    check_folds(y[kept], class_names, args.folds, args.neighbors, args.random_state)
+    return kept, skipped
 
 
 def _stage(names: Names, function, *args):
@@ -424,7 +443,13 @@ def _run(args) -> int:
     first_run_note()
 
     eigen, distance = pipeline.named_steps["eigen"], pipeline.named_steps["distance"]
-    fields, warned = _timed(timings, "eigen stage", compute_fields, samples, eigen, names)
+    fields, warned, refused = _timed(
+        timings, "eigen stage", compute_fields, samples, eigen, names, args.skip_unreadable
+    )
+    if refused:
+        kept, left_out = _leave_out(refused, y, class_names, names, args)
+        fields, y, filenames = [fields[i] for i in kept], y[kept], [filenames[i] for i in kept]
+        names, skipped = names.subset(kept), skipped + left_out
     tables = []
     model = _timed(timings, "persistence", _stage, names, on_indices, distance, fields, tables)
     scores, predicted, fold_of = _timed(

@@ -148,6 +148,15 @@ def _eigen_one(item, *, indices, n_eigenpairs, settings, seed, memory):
     return clean, values, vectors, complete, edges
 
 
+def _or_error(work, item):
+    """``work(item)``, or the message of the ``ValueError``, ``TypeError`` or
+    ``MemoryError`` (each names the sample) by which it refused the sample."""
+    try:
+        return work(item)
+    except (ValueError, TypeError, MemoryError) as error:
+        return str(error)
+
+
 class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_output_keys=None):
     """Compute a Laplacian eigenfunction or signature on each mesh, point cloud or graph.
 
@@ -435,6 +444,13 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
         ConstantEigenfunctionWarning
             When ``eigen_index`` holds 0, the constant eigenfunction.
         """
+        return self._transform(X)[0]
+
+    def _transform(self, X, skip=False):
+        """:meth:`transform`, and with ``skip`` each sample refused by its own checks
+        left out instead of raising: ``(fields, errors)``, ``fields[i]`` None for a
+        sample left out and ``errors`` its ``(i, message)`` pairs (for the main job's
+        ``--skip-unreadable``)."""
         self._check_params()
         meshes = self._check_samples(X)
         indices = self._indices()
@@ -445,7 +461,7 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
                 "is a single point and says nothing about the shape; the Fiedler vector "
                 "is eigen_index=1",
                 ConstantEigenfunctionWarning,
-                stacklevel=2,
+                stacklevel=3,  # the caller of transform
             )
         if isinstance(self.random_state, Integral):
             seed = int(self.random_state)
@@ -482,7 +498,7 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
                 memory=memory,
             )
             solved = map_samples(
-                work,
+                partial(_or_error, work) if skip else work,
                 [(i, meshes[i]) for i in order],
                 n_jobs=self.n_jobs,
                 desc="eigensolves",
@@ -492,10 +508,18 @@ class LaplacianEigenTransformer(ObjectOutput, SampleTransformer, auto_wrap_outpu
         for i, result in zip(order, solved, strict=True):
             results[i] = result
         column = indices[0] if not isinstance(self.eigen_index, tuple) else list(indices)
-        fields = []
+        fields, errors = [], []
         for i, result in enumerate(results):  # not a comprehension, a frame more to warn
-            fields.append(self._field(i, meshes[i], result, signature, indices, column, n_kept))
-        return fields
+            try:
+                if isinstance(result, str):  # a message of _or_error
+                    raise ValueError(result)
+                fields.append(self._field(i, meshes[i], result, signature, indices, column, n_kept))
+            except ValueError as error:
+                if not skip:
+                    raise
+                fields.append(None)
+                errors.append((i, str(error)))
+        return fields, errors
 
     def _field(self, i, sample, result, signature, indices, column, n_kept):
         """The :class:`ScalarField` of sample ``i`` from its solve."""
