@@ -224,3 +224,39 @@ def test_compiled_assembly_is_the_scipy_sum_of_the_fans(case):
     np.testing.assert_array_equal(M.diagonal(), mass)
     assert abs(L - L.T).max() == 0.0
     np.testing.assert_allclose(np.asarray(L.sum(axis=1)).ravel(), 0.0, atol=1e-12)
+
+
+def _lattice():
+    x, y = np.meshgrid(np.arange(20.0), np.arange(20.0))
+    return np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+
+
+@pytest.mark.parametrize("dropped", [[57], [0, 1, 2, 399], list(range(0, 400, 7))])
+def test_nearest_within_a_lattice_is_a_search_of_the_subset(dropped):
+    # Many neighbours tie with the 30th on a grid: a k-d tree breaks such ties by its
+    # build, so the lists must be ranked (distance, then index) to be the subset's own.
+    from sklearn_meshph.pointcloud._triangulation import nearest, nearest_within
+
+    points = _lattice()
+    keep = np.ones(len(points), dtype=bool)
+    keep[dropped] = False
+    expected = nearest(points[keep], 30)
+    found = nearest_within(points, nearest(points, 30), keep, 30)
+    for a, b in zip(found, expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+    # Ranked: by distance, ties by index.
+    distances, indices = expected
+    tied = distances[:, 1:] == distances[:, :-1]
+    assert tied.any() and (indices[:, 1:][tied] > indices[:, :-1][tied]).all()
+
+
+def test_a_welded_twin_leaves_a_lattice_cloud_as_it_was():
+    from sklearn_meshph import LaplacianEigenTransformer
+
+    grid = _lattice()
+    twin = np.vstack([grid, grid[57] + [1e-6, 0.0, 0.0]])  # merged into grid[57]
+    eigen = LaplacianEigenTransformer(eigen_index=(1, 2, 3, 4, 5))
+    alone, with_twin = eigen.fit_transform([grid, twin])
+    np.testing.assert_array_equal(with_twin.eigenvalues, alone.eigenvalues)
+    np.testing.assert_array_equal(with_twin.values[:400], alone.values)
+    np.testing.assert_array_equal(with_twin.edges, alone.edges)

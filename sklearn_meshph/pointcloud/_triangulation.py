@@ -45,22 +45,63 @@ MIN_NORMAL_COSINE = 0.5
 
 def nearest(points: np.ndarray, n_neighbors: int) -> tuple[np.ndarray, np.ndarray]:
     """Distances and indices ``(n, k)`` of each point's ``k`` nearest other points,
-    nearest first (``k = min(n_neighbors, n - 1)``), by an exact k-d tree search."""
+    nearest first, ties by the lower index (``k = min(n_neighbors, n - 1)``), by an
+    exact k-d tree search: the same lists whatever else the cloud holds beyond them."""
     k = min(n_neighbors, len(points) - 1)
     if k < 1:  # one point (or none): no neighbours
         return np.empty((len(points), 0)), np.empty((len(points), 0), dtype=np.intp)
-    distances, indices = cKDTree(points).query(points, k + 1)
-    # The point itself comes first, unless a duplicate of it does: drop it wherever it is.
-    itself = indices == np.arange(len(points))[:, None]
+    return _ranked(cKDTree(points), points, np.arange(len(points)), k)
+
+
+def _ranked(tree, queries, own, k):
+    """The ``k`` nearest points of ``tree`` to each of ``queries`` but its ``own`` index,
+    ranked by distance, then index.
+
+    A k-d tree breaks ties between equal distances by its own build, which depends on
+    every point it holds: on a grid, the lists of a cloud and of the same cloud with one
+    twin more would differ where several points tie with the ``k``-th. So one more
+    neighbour is asked for: where it ties with the ``k``-th, the row is searched again
+    until the tie is whole; rows with ties are then ranked by index.
+    """
+    n = tree.n
+    distances, indices = _without_own(tree, queries, own, min(k + 2, n))
+    if distances.shape[1] > k:  # the (k + 1)-th: is it tied with the k-th?
+        tied = np.flatnonzero(distances[:, k] == distances[:, k - 1])
+        distances, indices = distances[:, :k].copy(), indices[:, :k].copy()
+        for row in tied:
+            count = min(2 * k + 2, n)
+            while True:
+                found, near = _without_own(tree, queries[row : row + 1], own[row : row + 1], count)
+                if count == n or found[0, -1] > found[0, k - 1]:
+                    break
+                count = min(2 * count, n)
+            order = np.lexsort((near[0], found[0]))[:k]
+            distances[row], indices[row] = found[0, order], near[0, order]
+    ties = np.flatnonzero((distances[:, 1:] == distances[:, :-1]).any(axis=1))
+    if len(ties):
+        order = np.lexsort((indices[ties], distances[ties]))
+        distances[ties] = np.take_along_axis(distances[ties], order, axis=1)
+        indices[ties] = np.take_along_axis(indices[ties], order, axis=1)
+    return distances, indices
+
+
+def _without_own(tree, queries, own, count):
+    """``tree.query(queries, count)`` without each query's ``own`` index (or, when a
+    duplicate hides it beyond ``count``, without the last), ``count - 1`` columns."""
+    distances, indices = tree.query(queries, count)
+    distances = distances.reshape(len(queries), count)
+    indices = indices.reshape(len(queries), count)
+    itself = indices == own[:, None]
     itself[~itself.any(axis=1), -1] = True
     keep = ~itself
-    return distances[keep].reshape(-1, k), indices[keep].reshape(-1, k)
+    return distances[keep].reshape(-1, count - 1), indices[keep].reshape(-1, count - 1)
 
 
 def nearest_within(points, knn, keep, n_neighbors):
     """:func:`nearest` of ``points[keep]`` for ``n_neighbors``, from ``knn``, that of all
     the ``points`` for as many: a point none of whose nearest is dropped keeps them
-    (renumbered); only the others are searched again, among the kept points."""
+    (renumbered: its ranking is the same among fewer points); only the others are
+    searched again, among the kept points."""
     distances, indices = knn
     kept = np.flatnonzero(keep)
     k = min(n_neighbors, len(kept) - 1)
@@ -72,11 +113,7 @@ def nearest_within(points, knn, keep, n_neighbors):
     stale = np.flatnonzero((indices < 0).any(axis=1))
     if len(stale):
         subset = points[kept]
-        found, near = cKDTree(subset).query(subset[stale], k + 1)
-        itself = near == stale[:, None]
-        itself[~itself.any(axis=1), -1] = True
-        distances[stale] = found[~itself].reshape(-1, k)
-        indices[stale] = near[~itself].reshape(-1, k)
+        distances[stale], indices[stale] = _ranked(cKDTree(subset), subset[stale], stale, k)
     return distances, indices
 
 
