@@ -260,3 +260,25 @@ def test_a_welded_twin_leaves_a_lattice_cloud_as_it_was():
     np.testing.assert_array_equal(with_twin.eigenvalues, alone.eigenvalues)
     np.testing.assert_array_equal(with_twin.values[:400], alone.values)
     np.testing.assert_array_equal(with_twin.edges, alone.edges)
+
+
+def test_a_tie_wider_than_the_search_is_ranked_whole():
+    # The centre of the 84 integer points at distance sqrt(50) (and of 5 more beyond
+    # them): its 30 nearest are those 84's 30 of lowest index, found through several
+    # wider searches; their distances are exact.
+    from itertools import product
+
+    from sklearn_meshph.pointcloud._triangulation import nearest, nearest_within
+
+    shell = np.array([p for p in product(range(-7, 8), repeat=3) if np.dot(p, p) == 50], float)
+    assert len(shell) == 84
+    rng = np.random.default_rng(0)
+    points = np.vstack([rng.permutation(shell), [[0.0, 0.0, 0.0]], 20 + rng.random((5, 3))])
+    distances, indices = nearest(points, 30)
+    np.testing.assert_array_equal(indices[84], np.arange(30))
+    np.testing.assert_array_equal(distances[84], np.sqrt(50.0))
+    keep = np.ones(len(points), dtype=bool)
+    keep[[0, 5, 29]] = False
+    expected = nearest(points[keep], 30)
+    for a, b in zip(nearest_within(points, (distances, indices), keep, 30), expected, strict=True):
+        np.testing.assert_array_equal(a, b)

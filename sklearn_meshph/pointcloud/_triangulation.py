@@ -68,15 +68,16 @@ def _ranked(tree, queries, own, k):
     if distances.shape[1] > k:  # the (k + 1)-th: is it tied with the k-th?
         tied = np.flatnonzero(distances[:, k] == distances[:, k - 1])
         distances, indices = distances[:, :k].copy(), indices[:, :k].copy()
-        for row in tied:
-            count = min(2 * k + 2, n)
-            while True:
-                found, near = _without_own(tree, queries[row : row + 1], own[row : row + 1], count)
-                if count == n or found[0, -1] > found[0, k - 1]:
-                    break
-                count = min(2 * count, n)
-            order = np.lexsort((near[0], found[0]))[:k]
-            distances[row], indices[row] = found[0, order], near[0, order]
+        count = k + 2
+        while len(tied):  # searched again, wider each time, until the tie is whole
+            count = min(count + 8 if count == k + 2 else 2 * count, n)
+            found, near = _without_own(tree, queries[tied], own[tied], count)
+            whole = (found[:, -1] > found[:, k - 1]) | (count == n)
+            order = np.lexsort((near[whole], found[whole]))[:, :k]
+            rows = tied[whole]
+            distances[rows] = np.take_along_axis(found[whole], order, axis=1)
+            indices[rows] = np.take_along_axis(near[whole], order, axis=1)
+            tied = tied[~whole]
     ties = np.flatnonzero((distances[:, 1:] == distances[:, :-1]).any(axis=1))
     if len(ties):
         order = np.lexsort((indices[ties], distances[ties]))
