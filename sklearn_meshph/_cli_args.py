@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import ast
 import json
+import os
 import re
 import tempfile
 from pathlib import Path
@@ -307,6 +308,12 @@ def check_output(output: Path) -> None:
         raise UsageError(f"--output {str(output)!r} exists and is not a folder")
     for name in RESULT_FILES:  # checked now: a FIFO there would hang the job at its end
         inside = output / name
+        if inside.is_file() and not inside.is_symlink() and not os.access(inside, os.W_OK):
+            raise UsageError(
+                f"--output {str(output)!r} holds {name!r}, which is read-only: the job "
+                "writes over or removes its result files there; make it writable or "
+                "choose another --output"
+            )
         if inside.is_symlink() or (inside.exists() and not inside.is_file()):
             raise UsageError(
                 f"--output {str(output)!r} holds {name!r}, which is not a regular file (a "

@@ -123,8 +123,10 @@ def json_safe(value):
 
 
 def write_data(output: Path, matrix, diagrams, predictions, names, filenames, summary):
-    """The result files (see the command line's help), an earlier run's removed first;
-    returns their paths.
+    """The result files (see the command line's help); returns their paths. An
+    earlier run's data files are written over (``summary.json`` replaced whole); its
+    ``diagrams.npz`` when this run has none, and its pictures (this run's come after
+    the data), are removed first, so none is left beside this run's matrix.
 
     ``diagrams`` is ``(per-sample tuples of diagrams, their names)``, or None for no
     ``diagrams.npz``; ``predictions`` is ``(true labels, predicted labels, fold of each
@@ -132,11 +134,10 @@ def write_data(output: Path, matrix, diagrams, predictions, names, filenames, su
     """
     y, predicted, fold_of = predictions
     output.mkdir(parents=True, exist_ok=True)
-    # An earlier run's results there are replaced below or would be stale (pictures of
-    # another run beside this one's matrix, with --no-plots or another preset): gone.
-    for name in RESULT_FILES:
-        (output / name).unlink(missing_ok=True)
     paths = [output / f for f in DATA_FILES if diagrams is not None or "diagrams" not in f]
+    for name in RESULT_FILES:
+        if output / name not in paths:
+            (output / name).unlink(missing_ok=True)
     np.save(output / "distances.npy", np.asarray(matrix, dtype=np.float64))
     if diagrams is not None:
         samples, diagram_names = diagrams

@@ -26,6 +26,7 @@ file). Output cut short by its reader (``| head``) ends the job quietly.
 from __future__ import annotations
 
 import os
+import re
 import sys
 import time
 import warnings
@@ -257,13 +258,18 @@ def compute_fields(samples, eigen, names: Names, skip: bool = False):
         warnings.simplefilter("always", MeshCleaningWarning)
         _stage(names, eigen.fit, samples)
         fields, refused = _stage(names, eigen._transform, samples, skip)
+    gone = {i for i, _ in refused}  # the samples left out are not counted
+
+    def kept_indices(category):
+        return [i for i in sample_indices(caught, category) if i not in gone]
+
     counts = {
         "repeated_eigenvalue": note(
-            sample_indices(caught, RepeatedEigenvalueWarning),
+            kept_indices(RepeatedEigenvalueWarning),
             "have a repeated eigenvalue at the requested index",
             names,
         ),
-        "cleaned": note(sample_indices(caught, MeshCleaningWarning), "were cleaned", names),
+        "cleaned": note(kept_indices(MeshCleaningWarning), "were cleaned", names),
     }
     for w in caught:  # others: shown once each, as Python would
         if not issubclass(w.category, (RepeatedEigenvalueWarning, MeshCleaningWarning)):
@@ -272,20 +278,26 @@ def compute_fields(samples, eigen, names: Names, skip: bool = False):
 
 
 def _leave_out(refused, y, class_names, names: Names, args):
-    """The indices of the samples but the ``refused`` ones (listed), the folds checked
-    again on them, and the ``(file, reason)`` pairs of the refused."""
+    """The samples but the ``refused`` ones (listed by file, as unreadable files are):
+    ``(kept indices, y, class_names, skipped)``, ``y`` and ``class_names`` without the
+    classes left with no sample (as a class of unreadable files is dropped), the folds
+    checked again, ``skipped`` the ``(file, reason)`` pairs of the refused."""
     print(f"left out {len(refused)} sample(s) that cannot be used:")
     skipped = []
     for i, message in refused:
         file = names.files[i] if names.files is not None else f"sample {i}"
-        skipped.append((file, names.message(message)))
-        print(wrap(f"  {printable(skipped[-1][1])}"))
+        # By file, not by number: the samples are numbered anew without them.
+        reason = f"{file}: {re.sub(rf'^sample {i}: ', '', one_line(message))}"
+        skipped.append((file, reason))
+        print(wrap(f"  {printable(reason)}"))
     gone = {i for i, _ in refused}
     kept = [i for i in range(len(y)) if i not in gone]
     if not kept:
         raise DataError("no sample can be used (all were left out above)")
-    check_folds(y[kept], class_names, args.folds, args.neighbors, args.random_state)
-    return kept, skipped
+    present, y = np.unique(y[kept], return_inverse=True)
+    class_names = [class_names[c] for c in present]
+    check_folds(y, class_names, args.folds, args.neighbors, args.random_state)
+    return kept, y, class_names, skipped
 
 
 def _stage(names: Names, function, *args):
@@ -447,8 +459,8 @@ def _run(args) -> int:
         timings, "eigen stage", compute_fields, samples, eigen, names, args.skip_unreadable
     )
     if refused:
-        kept, left_out = _leave_out(refused, y, class_names, names, args)
-        fields, y, filenames = [fields[i] for i in kept], y[kept], [filenames[i] for i in kept]
+        kept, y, class_names, left_out = _leave_out(refused, y, class_names, names, args)
+        fields, filenames = [fields[i] for i in kept], [filenames[i] for i in kept]
         names, skipped = names.subset(kept), skipped + left_out
     tables = []
     model = _timed(timings, "persistence", _stage, names, on_indices, distance, fields, tables)

@@ -2,6 +2,10 @@
 eigen stage refuses, are left out and listed; the rest is what it would be alone."""
 
 import json
+import os
+import shutil
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -51,8 +55,11 @@ def test_samples_the_eigen_stage_refuses_are_left_out_and_listed(tmp_path, capsy
     assert main([str(data), *FAST, "--skip-unreadable", "--output", str(out)]) == 0
     stdout = capsys.readouterr().out
     assert "left out 2 sample(s) that cannot be used:" in stdout
-    assert "(long/flat.off): every face is degenerate" in stdout
-    assert "(round/nan.off): vertex 2 has a non-finite coordinate" in stdout
+    # By file, not by a number (the samples are numbered anew without them).
+    assert "  long/flat.off: every face is degenerate" in stdout
+    assert "  round/nan.off: vertex 2 has a non-finite coordinate" in stdout
+    listed = stdout.split("cannot be used:\n")[1].split("\n")[:2]
+    assert all(line.startswith("  ") and "sample" not in line for line in listed)
     summary = _summary(out)
     assert sorted(s["file"] for s in summary["skipped"]) == ["long/flat.off", "round/nan.off"]
     assert summary["n_samples"] == 6 and summary["class_counts"] == [3, 3]
@@ -102,3 +109,67 @@ def test_the_constant_eigenfunction_warning_points_at_the_caller():
         eigen.transform([_jittered(0)])
     [warning] = [w for w in caught if w.category is ConstantEigenfunctionWarning]
     assert warning.filename == __file__
+
+
+def _lossy():
+    """A big triangle and 10 small ones far away: cleaned (with a warning) to three
+    vertices, too few for eigenfunction 3."""
+    small = [[10 + 3 * k, 0, 0] for k in range(10)]
+    vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    faces = [[0, 1, 2]]
+    for x, y, z in small:
+        faces.append([len(vertices), len(vertices) + 1, len(vertices) + 2])
+        vertices += [[x, y, z], [x + 0.01, y, z], [x, y + 0.01, z]]
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def test_a_sample_left_out_counts_in_no_warning(tmp_path, capsys):
+    data = _folder(tmp_path / "data")
+    preset = ["--preset", "eigenfunctions"]
+    assert main([str(data), *FAST, *preset, "--output", str(tmp_path / "clean")]) == 0
+    _lossy().export(data / "round" / "lossy.off")
+    out = tmp_path / "out"
+    assert main([str(data), *FAST, *preset, "--skip-unreadable", "--output", str(out)]) == 0
+    assert "round/lossy.off: eigen_index 3 needs at least 4 vertices" in capsys.readouterr().out
+    assert _summary(out)["warnings"] == _summary(tmp_path / "clean")["warnings"]
+
+
+def test_a_class_of_refused_samples_is_dropped_as_a_class_of_unreadable_files(tmp_path, capsys):
+    data = _folder(tmp_path / "data")
+    for name, text in (("unusable", FLAT_MESH), ("unreadable", "not a mesh\n")):
+        (data / name).mkdir()
+        for k in range(2):
+            (data / name / f"m{k}.off").write_text(text)
+    out = tmp_path / "out"
+    assert main([str(data), *FAST, "--skip-unreadable", "--output", str(out)]) == 0
+    summary = _summary(out)
+    assert summary["class_names"] == ["long", "round"] and summary["class_counts"] == [3, 3]
+    assert len(summary["skipped"]) == 4
+
+
+def test_a_read_only_result_file_is_refused_not_removed(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "tsne.png").write_bytes(b"kept")
+    (out / "tsne.png").chmod(0o444)
+    command = [sys.executable, "-m", "sklearn_meshph", "--n-per-class", "2", "--output"]
+    command += [str(out), *FAST]
+    if os.geteuid() == 0:  # root writes anything: run without that capability
+        if shutil.which("setpriv") is None:
+            pytest.skip("root without setpriv")
+        command = ["setpriv", "--bounding-set", "-dac_override,-dac_read_search", *command]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert "holds 'tsne.png', which is read-only" in done.stderr
+    assert (out / "tsne.png").read_bytes() == b"kept"
+
+
+def test_a_run_that_writes_the_data_keeps_it_whole_and_drops_only_stale_files(tmp_path):
+    out = tmp_path / "out"
+    assert main(["--n-per-class", "2", "--output", str(out), *FAST]) == 0
+    first = (out / "distances.npy").read_bytes()
+    (out / "eigenfunctions.png").write_bytes(b"an earlier run's picture")
+    argv = ["--n-per-class", "2", "--preset", "shape-dna", "--output", str(out), *FAST]
+    assert main(argv) == 0
+    assert not (out / "eigenfunctions.png").exists() and not (out / "diagrams.npz").exists()
+    assert (out / "distances.npy").read_bytes() != first
