@@ -41,7 +41,8 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 import trimesh
-from _common import collection, loo_1nn
+from _common import collection
+from cloud_oracle import PARTS, part_scores
 from joblib import parallel_backend
 from scipy.spatial import cKDTree
 
@@ -50,12 +51,6 @@ from sklearn_meshph.pointcloud import _triangulation
 from sklearn_meshph.spectral.eigensolver import generalized_eigenpairs
 from sklearn_meshph.spectral.signatures import heat_kernel_signature, hks_times
 
-PARTS = {
-    "ord1": {"ord1": 1.0, "ext0": 0.0, "ext1": 0.0, "dna": 0.0},
-    "ext0": {"ord1": 0.0, "ext0": 1.0, "ext1": 0.0, "dna": 0.0},
-    "Shape-DNA": {"ord1": 0.0, "ext0": 0.0, "ext1": 0.0, "dna": 1.0},
-    "all (no ext1)": {"ord1": 1.0, "ext0": 0.5, "ext1": 0.0, "dna": 0.5},
-}
 TIMES = 5
 EIGENPAIRS = 48
 
@@ -65,14 +60,6 @@ def fields_of(samples):
     with warnings.catch_warnings(), parallel_backend("threading", n_jobs=2):
         warnings.simplefilter("ignore")
         return make_mesh_distance(n_jobs=2).named_steps["eigen"].fit_transform(samples)
-
-
-def scores(fields, y):
-    distance = make_mesh_distance(n_jobs=2).named_steps["distance"]
-    return {
-        part: loo_1nn(distance.set_params(weights=weights).fit_transform(fields), y)
-        for part, weights in PARTS.items()
-    }
 
 
 def log_hks(values, vectors, times):
@@ -187,7 +174,7 @@ def main():
         print("| operator | " + " | ".join(PARTS) + " |\n" + "|---" * (len(PARTS) + 1) + "|")
         for label, patch in (("ours", ORIGINAL), ("relaxed at open fans", relaxed_at_open_fans)):
             _triangulation.surface_neighbours = patch
-            row = scores(fields_of(clouds), y)
+            row = part_scores(fields_of(clouds), y)
             print(f"| {label} | " + " | ".join(f"{s:.3f}" for s in row.values()) + " |")
         _triangulation.surface_neighbours = ORIGINAL
         return
@@ -253,7 +240,8 @@ def main():
         + "|"
     )
     for label, fields in {"the pipeline's": cloud_fields, **variants}.items():
-        print(f"| {label} | " + " | ".join(f"{s:.3f}" for s in scores(fields, y).values()) + " |")
+        row = part_scores(fields, y)
+        print(f"| {label} | " + " | ".join(f"{s:.3f}" for s in row.values()) + " |")
     print(
         "\n| averaged over the neighbours | meshes: "
         + ", ".join(PARTS)
@@ -262,10 +250,11 @@ def main():
         + " |\n|---|---|---|"
     )
     for steps in (0, 1, 2, 4):
-        cells = [
-            " / ".join(f"{s:.3f}" for s in scores([smoothed(f, steps) for f in fields], y).values())
+        rows = [
+            part_scores([smoothed(f, steps) for f in fields], y)
             for fields in (mesh_fields, cloud_fields)
         ]
+        cells = [" / ".join(f"{s:.3f}" for s in row.values()) for row in rows]
         print(f"| {steps} | " + " | ".join(cells) + " |", flush=True)
 
 
