@@ -183,39 +183,156 @@ def test_wide_neighbourhoods_fit_their_planes_and_quadrics_locally(n_neighbors):
     np.testing.assert_allclose(values, 2.0, rtol=0.02)  # l(l + 1) for l = 1
 
 
-def _scipy_cotangent(n, triangles, a, b):
-    """The cotangent stiffness and lumped mass of measured triangles, by scipy's sparse
-    sums (the compiled assembly's oracle)."""
+def _scipy_cotangent(n, triangles, a, b, shares):
+    """The cotangent stiffness and lumped mass of measured triangles, each times three
+    times its share, then divided by three, by scipy's sparse sums (the compiled
+    assembly's oracle)."""
+    weight = 3 * shares
     double_area = np.linalg.norm(np.cross(a, b), axis=1)
-    opposite_i = (a * b).sum(1) / double_area
-    opposite_j = (a * (a - b)).sum(1) / double_area
-    opposite_k = (b * (b - a)).sum(1) / double_area
+    opposite_i = (a * b).sum(1) / double_area * weight
+    opposite_j = (a * (a - b)).sum(1) / double_area * weight
+    opposite_k = (b * (b - a)).sum(1) / double_area * weight
     i, j, k = triangles.T
     half = np.concatenate([opposite_i, opposite_j, opposite_k]) / 2
     rows, cols = np.concatenate([j, i, i]), np.concatenate([k, k, j])
     weights = scipy.sparse.coo_matrix((half, (rows, cols)), shape=(n, n)).tocsr()
     weights = weights + weights.T
     L = scipy.sparse.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights
-    mass = np.bincount(triangles.ravel(), np.repeat(double_area / 6, 3), minlength=n)
+    mass = np.bincount(triangles.ravel(), np.repeat(double_area / 6 * weight, 3), minlength=n)
     return (L / 3).tocsr(), mass / 3
 
 
-@pytest.mark.parametrize("case", ["hairpin", "sheets", "right angles"])
+def _shares_by_sets(n, triangles):
+    """:func:`fan_shares` by Python sets: a corner has a say on a triangle when it
+    holds it or its own fan chains around it (each triangle's last corner the first of
+    another of its triangles)."""
+    fans = [[] for _ in range(n)]
+    holders = {}
+    for i, j, k in triangles.tolist():
+        fans[i].append((j, k))
+        holders.setdefault(frozenset((i, j, k)), set()).add(i)
+    closed = [len(fan) >= 3 and {k for _, k in fan} <= {j for j, _ in fan} for fan in fans]
+    return np.array(
+        [1 / len(holders[frozenset(t)] | {c for c in t if closed[c]}) for t in triangles.tolist()]
+    )
+
+
+def _folded(n, degrees, seed=0):
+    """``n`` uniform points on a 2 x 1 rectangle folded along ``x = 1`` to ``degrees``
+    (180: flat; the normal test cuts a crease's far side below 120), and their
+    coordinates on the unfolded rectangle."""
+    rng = np.random.default_rng(seed)
+    u = rng.random((n, 2)) * [2.0, 1.0]
+    angle = np.radians(180 - degrees)
+    s = np.maximum(u[:, 0] - 1, 0.0)
+    x = np.minimum(u[:, 0], 1.0) + s * np.cos(angle)
+    return np.column_stack([x, u[:, 1], s * np.sin(angle)]), u
+
+
+def test_fan_shares_of_hand_made_fans():
+    from sklearn_meshph.pointcloud.laplacians import fan_shares
+
+    # Point 0's fan is closed around 1, 2, 3; point 1's fan is (1, 2, 0) alone, point
+    # 2's (2, 0, 3) alone (both open); point 3 has none. (0, 1, 2): 0 and 1 have a say,
+    # not 2 (open, without it); (0, 2, 3): 0 and 2; (0, 3, 1): 0 alone (1 and 3 open,
+    # without it), so it counts once from 0's fan where thirds would count it a third.
+    triangles = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 2, 0], [2, 0, 3]])
+    shares = fan_shares(4, triangles)
+    np.testing.assert_array_equal(shares, [1 / 2, 1 / 2, 1, 1 / 2, 1 / 2])
+    np.testing.assert_array_equal(shares, _shares_by_sets(4, triangles))
+    # A closed fan that chose other triangles still has a say (the neighbourhoods
+    # disagree): (0, 1, 2) back to thirds once 2's fan is closed around 0, 3, 4.
+    closed_two = np.vstack([triangles[:4], [[2, 0, 3], [2, 3, 4], [2, 4, 0]]])
+    shares = fan_shares(5, closed_two)
+    np.testing.assert_array_equal(shares[[0, 3]], [1 / 3, 1 / 3])
+    np.testing.assert_array_equal(shares, _shares_by_sets(5, closed_two))
+    assert fan_shares(0, np.empty((0, 3), np.int64)).shape == (0,)
+
+
+@pytest.mark.parametrize("case", ["folded 90", "folded 180", "hairpin", "sheets"])
+def test_fan_shares_are_those_of_the_sets(case):
+    from sklearn_meshph.pointcloud._triangulation import tangent_fans
+    from sklearn_meshph.pointcloud.laplacians import fan_shares
+
+    if case.startswith("folded"):
+        points = _folded(1500, int(case.split()[1]))[0]
+    elif case == "hairpin":
+        points = hairpin(2000, 0.1)[0]
+    else:
+        points = two_sheets(800, 0.3)
+    triangles = tangent_fans(points)[0]
+    shares = fan_shares(len(points), triangles)
+    np.testing.assert_array_equal(shares, _shares_by_sets(len(points), triangles))
+    # Open fans are where the surface has a rim (and a crease): some share exceeds 1/3.
+    assert (shares > 1 / 3).any() and (shares == 1 / 3).mean() > 0.8
+
+
+@pytest.mark.parametrize("degrees", [180, 90])
+def test_a_rim_keeps_its_area(degrees):
+    # The points of a rim have open fans: the triangles there are held by the two
+    # corners inside, and counted two thirds they would leave the rim light (the mass
+    # of the points within 0.02 of the rectangle's edge: 0.79 of the band's area on
+    # average over these samples with thirds, 0.85 with the shares). The rectangle
+    # folded to a right angle is isometric to the flat one: the same spectrum.
+    exact = sorted((np.pi * m / 2) ** 2 + (np.pi * k) ** 2 for m in range(6) for k in range(4))
+    band_area = 2 * 0.02 * (2 + 1) - 4 * 0.02**2
+    ratios, errors = [], []
+    for seed in range(3):
+        points, u = _folded(3000, degrees, seed)
+        L, M = point_cloud_laplacian(points)
+        band = (np.minimum(u[:, 1], 1 - u[:, 1]) < 0.02) | (np.minimum(u[:, 0], 2 - u[:, 0]) < 0.02)
+        ratios.append(M.diagonal()[band].sum() / band_area)
+        keep = M.diagonal() > 0  # a crease point may be in no triangle (no mass, no stiffness)
+        L, M = L[keep][:, keep], M.tocsr()[keep][:, keep]
+        values = scipy.linalg.eigh(
+            L.toarray(), M.toarray(), eigvals_only=True, subset_by_index=[1, 4]
+        )
+        errors.append(values / exact[1:5] - 1)
+    assert np.mean(ratios) > 0.83
+    assert np.abs(np.mean(errors, axis=0)).max() < 0.04
+
+
+def test_closed_fans_keep_the_thirds_bit_for_bit():
+    # On a closed surface every fan chains around its point: every corner has a say,
+    # each triangle's share is a third, and the operator is the plain sum of the fans
+    # divided by three, to the bit (3 * (1 / 3) is 1.0 in floating point).
+    import trimesh
+
+    from sklearn_meshph import sample_point_cloud
+    from sklearn_meshph.pointcloud._triangulation import tangent_fans
+    from sklearn_meshph.pointcloud.laplacians import _cotangent_csr, cloud_operator, fan_shares
+
+    points = sample_point_cloud(trimesh.creation.icosphere(4), 2000, random_state=0)
+    triangles, a, b = tangent_fans(points)
+    assert (fan_shares(len(points), triangles) == 1 / 3).all()
+    L, M, _ = cloud_operator(points)
+    indptr, indices, data, mass = _cotangent_csr(
+        len(points), triangles, a, b, np.ones(len(triangles))
+    )
+    np.testing.assert_array_equal(L.data, data / 3.0)
+    np.testing.assert_array_equal(L.indices, indices)
+    np.testing.assert_array_equal(M.diagonal(), mass / 3.0)
+
+
+@pytest.mark.parametrize("case", ["hairpin", "sheets", "right angles", "folded 90"])
 def test_compiled_assembly_is_the_scipy_sum_of_the_fans(case):
     from sklearn_meshph.pointcloud._triangulation import tangent_fans
-    from sklearn_meshph.pointcloud.laplacians import cloud_operator
+    from sklearn_meshph.pointcloud.laplacians import cloud_operator, fan_shares
 
     if case == "hairpin":
         points = hairpin(2000, 0.1)[0]
     elif case == "sheets":
         points = two_sheets(800, 0.3)
+    elif case == "folded 90":
+        points = _folded(1500, 90)[0]
     else:  # a grid: right angles, whose cotangents cancel exactly (entries left out)
         x, y = np.meshgrid(np.arange(20.0), np.arange(20.0))
         points = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)]) / 19
     L, M, triangles = cloud_operator(points)
     expected_triangles, a, b = tangent_fans(points)
     np.testing.assert_array_equal(triangles, expected_triangles)
-    expected, mass = _scipy_cotangent(len(points), triangles, a, b)
+    shares = fan_shares(len(points), triangles)
+    expected, mass = _scipy_cotangent(len(points), triangles, a, b, shares)
     expected.sort_indices()
     assert L.has_sorted_indices
     np.testing.assert_array_equal(L.indptr, expected.indptr)

@@ -3,8 +3,8 @@
 - ``"cotangent"``: :func:`point_cloud_laplacian`, the cotangent Laplace-Beltrami
   operator of the union of local Delaunay triangulations of each point's neighbours on
   its own sheet of the surface, each point's triangles measured on the quadric fitted
-  to its neighbourhood, stiffness and mass divided by three since a
-  triangle on which the neighbourhoods agree appears once per corner. It converges to
+  to its neighbourhood, each triangle's stiffness and mass shared among the corners
+  that have a say on it (:func:`fan_shares`). It converges to
   the surface's operator under refinement, with uniform or uneven sampling and with
   noise below the sampling's spacing (measured against the unit sphere's spectrum in
   ``docs/point_clouds.md``).
@@ -36,6 +36,7 @@ __all__ = [
     "CLOUD_LAPLACIANS",
     "LOCAL_NEIGHBORS",
     "cloud_operator",
+    "fan_shares",
     "point_cloud_laplacian",
     "tangent_fans",
 ]
@@ -85,14 +86,17 @@ def point_cloud_laplacian(
     nearby) are projected onto its tangent plane and the Delaunay triangles at the
     point kept. Each triangle of a point's fan contributes the cotangent stiffness and
     barycentric mass (as in :func:`cotangent_laplacian`) of its shape on the quadric
-    fitted to the point's neighbourhood (tangent coordinates and fitted heights); the
-    sum over all fans is divided by three, since a triangle on which the neighbourhoods
-    agree is in the fans of its three corners. Neighbourhoods that disagree contribute
-    each of their choices with its share; every triangle's stiffness is positive
-    semi-definite, so the sum is too. Neighbours across a thin part would be folded
-    into the fan by the projection, short-circuiting the surface (a stiffer operator,
-    less area); the fitted heights keep the bend of a thin part and leave out the
-    noise across the surface, which would otherwise add area at the sampling scale.
+    fitted to the point's neighbourhood (tangent coordinates and fitted heights),
+    divided among the corners that have a say on it (:func:`fan_shares`): a triangle on
+    which the neighbourhoods agree is in the fans of its three corners and counts once;
+    neighbourhoods that disagree contribute each of their choices with its share; a
+    corner whose fan leaves that side of it open (the sheet tests cut its neighbours
+    there: a crease, the tip or rim of a thin part) has no say. Every triangle's
+    stiffness is positive semi-definite, so the sum is too. Neighbours across a thin
+    part would be folded into the fan by the projection, short-circuiting the surface
+    (a stiffer operator, less area); the fitted heights keep the bend of a thin part
+    and leave out the noise across the surface, which would otherwise add area at the
+    sampling scale.
     This is the local triangulation of [1]_ (section 5.7) with an exact neighbour
     search, surface neighbourhoods, fitted geometry and without the tufted cover and
     intrinsic Delaunay flips, which on randomly sampled clouds lower the spectrum (the
@@ -136,18 +140,78 @@ def cloud_operator(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, *, kn
     """
     n = len(points)
     triangles, a, b = tangent_fans(points, n_neighbors, knn)
-    indptr, indices, data, mass = _cotangent_csr(n, triangles, a, b)
-    # A triangle on which the neighbourhoods agree is in the fans of its three corners.
+    indptr, indices, data, mass = _cotangent_csr(n, triangles, a, b, 3.0 * fan_shares(n, triangles))
     L = sp.csr_matrix((data / 3.0, indices, indptr), shape=(n, n))
     L.has_sorted_indices = True
     return L, sp.diags(mass / 3.0), triangles
 
 
 @numba.njit(cache=True)
-def _cotangent_csr(n, triangles, a, b):
-    """The cotangent stiffness of ``triangles`` as CSR arrays ``(indptr, indices,
-    data)`` (sorted columns, entries that sum to exactly zero left out) and their
-    lumped mass (a third of each triangle's area at each corner).
+def fan_shares(n, triangles):
+    """Each fan triangle's share of its shape: one over the number of its corners that
+    have a say on it.
+
+    ``triangles`` are :func:`tangent_fans`'s ``(i, j, k)``, ``i`` the point whose fan
+    holds it, each point's fan in turn, counter-clockwise around it. A point's fan is
+    closed when its triangles chain around it (each one's ``k`` is another's ``j``); it
+    is open where the sheet tests left its surface neighbours on one side (a crease,
+    the tip or the rim of a thin part), and where a degenerate triangle was dropped.
+    The fan's owner has a say on a triangle, and so has each other corner whose own fan
+    is closed or holds the triangle too. A triangle on which the neighbourhoods agree
+    is held by its three corners (share 1/3 each, once in all); where they disagree,
+    each choice counts with its share; a corner whose fan is open on that side has no
+    say, so a triangle held by the two others counts once, not two thirds (there the
+    operator would otherwise be cut, the heat held at the open fans).
+    """
+    m = triangles.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for t in range(m):
+        start[triangles[t, 0] + 1] += 1
+    for r in range(n):
+        start[r + 1] += start[r]
+    order = np.empty(m, np.int64)  # each point's triangles, in the order given
+    fill = start[:-1].copy()
+    for t in range(m):
+        order[fill[triangles[t, 0]]] = t
+        fill[triangles[t, 0]] += 1
+    closed = np.zeros(n, np.bool_)
+    for r in range(n):
+        closed[r] = start[r + 1] - start[r] >= 3
+        for s in range(start[r], start[r + 1]):
+            chained = False
+            for u in range(start[r], start[r + 1]):
+                if triangles[order[u], 1] == triangles[order[s], 2]:
+                    chained = True
+                    break
+            if not chained:
+                closed[r] = False
+                break
+    shares = np.empty(m)
+    for t in range(m):
+        say = 1
+        for c in range(1, 3):
+            corner, other = triangles[t, c], triangles[t, 3 - c]
+            if closed[corner]:
+                say += 1
+                continue
+            for s in range(start[corner], start[corner + 1]):
+                u = order[s]
+                pair = (triangles[u, 1], triangles[u, 2])
+                if (pair[0] == triangles[t, 0] and pair[1] == other) or (
+                    pair[1] == triangles[t, 0] and pair[0] == other
+                ):
+                    say += 1
+                    break
+        shares[t] = 1.0 / say
+    return shares
+
+
+@numba.njit(cache=True)
+def _cotangent_csr(n, triangles, a, b, weights):
+    """The cotangent stiffness of ``triangles``, each times its weight, as CSR arrays
+    ``(indptr, indices, data)`` (sorted columns, entries that sum to exactly zero left
+    out) and their lumped mass (a third of each triangle's weighted area at each
+    corner).
 
     Each triangle ``(i, j, k)`` is measured by its edge vectors ``a = j - i`` and
     ``b = k - i`` in the frame of ``i``; an edge weighs half the cotangent of the
@@ -163,25 +227,25 @@ def _cotangent_csr(n, triangles, a, b):
         start[r + 1] += start[r]
     fill = start[:-1].copy()
     columns = np.empty(6 * m, np.int64)
-    weights = np.empty(6 * m)
+    entries = np.empty(6 * m)
     mass = np.zeros(n)
     for t in range(m):
         ax, ay, az = a[t, 0], a[t, 1], a[t, 2]
         bx, by, bz = b[t, 0], b[t, 1], b[t, 2]
         cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
         double_area = np.sqrt(cx * cx + cy * cy + cz * cz)
-        at_i = (ax * bx + ay * by + az * bz) / double_area / 2.0
-        at_j = (ax * (ax - bx) + ay * (ay - by) + az * (az - bz)) / double_area / 2.0
-        at_k = (bx * (bx - ax) + by * (by - ay) + bz * (bz - az)) / double_area / 2.0
+        at_i = (ax * bx + ay * by + az * bz) / double_area / 2.0 * weights[t]
+        at_j = (ax * (ax - bx) + ay * (ay - by) + az * (az - bz)) / double_area / 2.0 * weights[t]
+        at_k = (bx * (bx - ax) + by * (by - ay) + bz * (bz - az)) / double_area / 2.0 * weights[t]
         i, j, k = triangles[t, 0], triangles[t, 1], triangles[t, 2]
         # Edge (j, k) is opposite i, (i, k) opposite j, (i, j) opposite k.
         for p, q, w in ((j, k, at_i), (i, k, at_j), (i, j, at_k)):
-            columns[fill[p]], weights[fill[p]] = q, w
+            columns[fill[p]], entries[fill[p]] = q, w
             fill[p] += 1
-            columns[fill[q]], weights[fill[q]] = p, w
+            columns[fill[q]], entries[fill[q]] = p, w
             fill[q] += 1
         for c in range(3):
-            mass[triangles[t, c]] += double_area / 6.0
+            mass[triangles[t, c]] += double_area / 6.0 * weights[t]
     # Each row's duplicates summed (in triangle order) through a slot per column,
     # then its distinct columns sorted (insertion sort: a few dozen), the diagonal (the
     # row's sum) in its place.
@@ -197,10 +261,10 @@ def _cotangent_csr(n, triangles, a, b):
             col = columns[s]
             if seen[col] != r:
                 seen[col], slot[col] = r, out
-                indices[out], data[out] = col, weights[s]
+                indices[out], data[out] = col, entries[s]
                 out += 1
             else:
-                data[slot[col]] += weights[s]
+                data[slot[col]] += entries[s]
         degree = 0.0
         kept = first
         for s in range(first, out):
