@@ -203,17 +203,19 @@ def _scipy_cotangent(n, triangles, a, b, shares):
 
 
 def _shares_by_sets(n, triangles):
-    """:func:`fan_shares` by Python sets: a corner has a say on a triangle when it
-    holds it or its own fan chains around it (each triangle's last corner the first of
-    another of its triangles)."""
+    """:func:`fan_shares` by Python sets: a corner has a say on a triangle when its own
+    fan chains around it (each triangle's last corner the first of another of its
+    triangles), or reaches the triangle's two other corners."""
     fans = [[] for _ in range(n)]
-    holders = {}
     for i, j, k in triangles.tolist():
         fans[i].append((j, k))
-        holders.setdefault(frozenset((i, j, k)), set()).add(i)
     closed = [len(fan) >= 3 and {k for _, k in fan} <= {j for j, _ in fan} for fan in fans]
+    reached = [{c for pair in fan for c in pair} for fan in fans]
     return np.array(
-        [1 / len(holders[frozenset(t)] | {c for c in t if closed[c]}) for t in triangles.tolist()]
+        [
+            1 / (1 + sum(closed[c] or set(t) - {c} <= reached[c] for c in t[1:]))
+            for t in triangles.tolist()
+        ]
     )
 
 

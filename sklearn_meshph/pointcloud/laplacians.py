@@ -157,10 +157,12 @@ def fan_shares(n, triangles):
     is open where the sheet tests left its surface neighbours on one side (a crease,
     the tip or the rim of a thin part), and where a degenerate triangle was dropped.
     The fan's owner has a say on a triangle, and so has each other corner whose own fan
-    is closed or holds the triangle too. A triangle on which the neighbourhoods agree
-    is held by its three corners (share 1/3 each, once in all); where they disagree,
-    each choice counts with its share; a corner whose fan is open on that side has no
-    say, so a triangle held by the two others counts once, not two thirds (there the
+    is closed or reaches both of the triangle's other corners (it holds the triangle,
+    or covers its side with other triangles: a rim point whose neighbourhood chose the
+    other diagonal of a square). A triangle on which the neighbourhoods agree is held
+    by its three corners (share 1/3 each, once in all); where they disagree, each
+    choice counts with its share; a corner whose fan is open on that side has no say,
+    so a triangle held by the two others counts once, not two thirds (there the
     operator would otherwise be cut, the heat held at the open fans).
     """
     m = triangles.shape[0]
@@ -194,14 +196,13 @@ def fan_shares(n, triangles):
             if closed[corner]:
                 say += 1
                 continue
+            reaches_owner = reaches_other = False
             for s in range(start[corner], start[corner + 1]):
-                u = order[s]
-                pair = (triangles[u, 1], triangles[u, 2])
-                if (pair[0] == triangles[t, 0] and pair[1] == other) or (
-                    pair[1] == triangles[t, 0] and pair[0] == other
-                ):
-                    say += 1
-                    break
+                for q in range(1, 3):
+                    reaches_owner |= triangles[order[s], q] == triangles[t, 0]
+                    reaches_other |= triangles[order[s], q] == other
+            if reaches_owner and reaches_other:
+                say += 1
         shares[t] = 1.0 / say
     return shares
 
