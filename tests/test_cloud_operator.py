@@ -248,6 +248,11 @@ def test_fan_shares_of_hand_made_fans():
     shares = fan_shares(5, closed_two)
     np.testing.assert_array_equal(shares[[0, 3]], [1 / 3, 1 / 3])
     np.testing.assert_array_equal(shares, _shares_by_sets(5, closed_two))
+    # A rim corner (0) whose open fan took the square's other diagonal (0, 2) still
+    # covers that side: it has a say on (1, 3, 0), which 1's fan holds.
+    square = np.array([[0, 1, 2], [0, 2, 3], [1, 3, 0]])
+    np.testing.assert_array_equal(fan_shares(4, square), [1, 1, 1 / 2])
+    np.testing.assert_array_equal(fan_shares(4, square), _shares_by_sets(4, square))
     assert fan_shares(0, np.empty((0, 3), np.int64)).shape == (0,)
 
 
