@@ -236,8 +236,9 @@ def test_fan_shares_of_hand_made_fans():
 
     # Point 0's fan is closed around 1, 2, 3; point 1's fan is (1, 2, 0) alone, point
     # 2's (2, 0, 3) alone (both open); point 3 has none. (0, 1, 2): 0 and 1 have a say,
-    # not 2 (open, without it); (0, 2, 3): 0 and 2; (0, 3, 1): 0 alone (1 and 3 open,
-    # without it), so it counts once from 0's fan where thirds would count it a third.
+    # not 2 (open, its fan does not reach 1); (0, 2, 3): 0 and 2; (0, 3, 1): 0 alone
+    # (1 and 3 open, not reaching 3 and 0), so it counts once from 0's fan where thirds
+    # would count it a third.
     triangles = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 2, 0], [2, 0, 3]])
     shares = fan_shares(4, triangles)
     np.testing.assert_array_equal(shares, [1 / 2, 1 / 2, 1, 1 / 2, 1 / 2])
