@@ -140,6 +140,8 @@ def cloud_operator(points: np.ndarray, n_neighbors: int = LOCAL_NEIGHBORS, *, kn
     """
     n = len(points)
     triangles, a, b = tangent_fans(points, n_neighbors, knn)
+    # Weighted by three times the shares, then divided by three: a share of a third is
+    # a weight of exactly 1.0, so closed fans give the plain sum's bits.
     indptr, indices, data, mass = _cotangent_csr(n, triangles, a, b, 3.0 * fan_shares(n, triangles))
     L = sp.csr_matrix((data / 3.0, indices, indptr), shape=(n, n))
     L.has_sorted_indices = True
