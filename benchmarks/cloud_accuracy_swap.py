@@ -5,17 +5,18 @@
 
 ``OPERATOR`` is ``new`` (the operator on each point's own sheet), ``old`` (commit
 ``2eb9ede``'s: the Delaunay fan of all 30 neighbours in the principal plane of all 30,
-measured in that plane) or ``robust`` (robust-laplacian's, 30 neighbours, in place of
-``point_cloud_laplacian``; the complex stays ours); ``COMPLEX`` is ``new`` (the edges
-of the operator's local triangles: with ``old``, the old fans'), ``knn`` (the
-symmetric 10-nearest-neighbour graph of ``2eb9ede``) or ``sheet`` (the triangles'
-edges and each point's 10 nearest neighbours that the operator keeps on its sheet),
-put in place of each field's edges after the eigen stage. The same clouds as
+measured in that plane), ``chord`` (the new operator's triangles measured by their
+chords in space, not on the fitted quadric) or ``robust`` (robust-laplacian's, 30
+neighbours, in place of ``point_cloud_laplacian``; the complex stays ours); ``COMPLEX``
+is ``new`` (the edges of the operator's local triangles: with ``old``, the old fans'),
+``knn`` (the symmetric 10-nearest-neighbour graph of ``2eb9ede``) or ``sheet`` (the
+triangles' edges and each point's 10 nearest neighbours that the operator keeps on its
+sheet), put in place of each field's edges after the eigen stage. The same clouds as
 ``learning_quality.py`` (seed = the mesh's index) go through ``make_mesh_distance()``;
 printed: leave-one-out 1-NN, and, beside the meshes' distance matrix without essential
 H1 (what a cloud's diagrams can hold), the Spearman correlation of the two matrices and
 the share of each sample's 5 nearest that they have in common. The swapped operators'
-solves are cached in folders of their own (``DIR/old-operator``,
+solves are cached in folders of their own (``DIR/old-operator``, ``DIR/chord-operator``,
 ``DIR/robust-operator``): the cache's key does not know the operator was swapped.
 """
 
@@ -41,6 +42,7 @@ from sklearn_meshph.pointcloud._triangulation import (
 )
 
 NO_EXT1 = {"ext0": 0.5, "ext1": 0.0, "dna": 0.5}
+NEW_TANGENT_FANS = cloud_laplacians.tangent_fans
 
 
 def old_tangent_fans(points, n_neighbors=30, knn=None):
@@ -58,6 +60,14 @@ def old_tangent_fans(points, n_neighbors=30, knn=None):
     zero = np.zeros((int(keep.sum()), 1))
     triangles = np.column_stack([i, neighbors[i, ja], neighbors[i, jb]])[keep]
     return triangles, np.hstack([a[keep], zero]), np.hstack([b[keep], zero])
+
+
+def chord_tangent_fans(points, n_neighbors=30, knn=None):
+    """The new operator's triangles, their edges the chords between the points."""
+    triangles, _, _ = NEW_TANGENT_FANS(points, n_neighbors, knn)
+    points = np.asarray(points, dtype=np.float64)
+    i, j, k = triangles.T
+    return triangles, points[j] - points[i], points[k] - points[i]
 
 
 def robust_operator(points, n_neighbors=30, *, knn=None):
@@ -85,7 +95,7 @@ def sheet_graph(points, width=10):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("operator", choices=["new", "old", "robust"])
+    parser.add_argument("operator", choices=["new", "old", "chord", "robust"])
     parser.add_argument("complex", choices=["new", "knn", "sheet"])
     parser.add_argument("--points", type=int, default=3000)
     parser.add_argument("--collection", default="watertight_dev")
@@ -96,6 +106,9 @@ def main():
     if args.operator == "old":
         cloud_laplacians.tangent_fans = old_tangent_fans
         memory = None if memory is None else str(Path(memory) / "old-operator")
+    if args.operator == "chord":
+        cloud_laplacians.tangent_fans = chord_tangent_fans
+        memory = None if memory is None else str(Path(memory) / "chord-operator")
     if args.operator == "robust":
         cloud_laplacians.CLOUD_LAPLACIANS._options["cotangent"] = Option(
             "cotangent", robust_operator, "robust-laplacian's"
