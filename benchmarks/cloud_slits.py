@@ -1,0 +1,92 @@
+"""How wide a mesh's holes are, in the spacing of a cloud sampled from it.
+
+    python benchmarks/cloud_slits.py [MESH ...] [--points 3000 10000]
+
+A hole narrower than the sampling's spacing (closed lips, a slit) is invisible in a
+cloud: the points of its two lips are as close as neighbours across the surface, so any
+operator built from the points joins them ("What no cloud operator can know" in
+docs/point_clouds.md). For each boundary loop of each mesh (default: one pose of each
+Sumner figure with a boundary): its vertices, its length over the mesh's diameter, and
+the quantiles of the distance from each of its vertices to the nearest vertex of the
+same loop at least 8 steps away along it (across the hole), in spacings
+``sqrt(area / points)`` of a uniform cloud of each size.
+"""
+
+import argparse
+
+import numpy as np
+import scipy.sparse as sp
+import trimesh
+from _common import DATA
+from scipy.sparse.csgraph import connected_components
+
+SHAPES = ["face/face-poses_1.obj", "head/head-01-anger.obj"]
+QUANTILES = (0.1, 0.25, 0.5, 0.75)
+MIN_STEPS = 8
+
+
+def boundary_loops(faces, n):
+    """Each boundary loop's vertices in order along it (the loops that touch no other)."""
+    edges = np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    border = unique[counts == 1]
+    graph = sp.coo_matrix((np.ones(len(border)), border.T), shape=(n, n)).tocsr()
+    graph = graph + graph.T
+    _, label = connected_components(graph, directed=False)
+    loops = []
+    for component in np.unique(label[np.unique(border)]):
+        start = np.flatnonzero(label == component)[0]
+        order, seen = [start], {start}
+        while True:  # a vertex where two loops touch ends the walk: the loop is skipped
+            following = [w for w in graph[order[-1]].indices if w not in seen]
+            if len(following) != 1 and len(order) > 1 or not following:
+                break
+            order.append(following[0])
+            seen.add(following[0])
+        if len(order) == np.count_nonzero(label == component):
+            loops.append(np.array(order))
+    return loops
+
+
+def across(points):
+    """Distance from each vertex of a loop to the nearest at least MIN_STEPS away."""
+    distance = np.linalg.norm(points[:, None] - points[None], axis=2)
+    steps = np.abs(np.arange(len(points))[:, None] - np.arange(len(points))[None])
+    distance[np.minimum(steps, len(points) - steps) < MIN_STEPS] = np.inf
+    return distance.min(axis=1)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("meshes", nargs="*", default=[str(DATA / "sumner" / s) for s in SHAPES])
+    parser.add_argument("--points", type=int, nargs="+", default=[3000, 10000])
+    args = parser.parse_args()
+    print(
+        "| mesh | loop vertices | loop length / diameter | "
+        + " | ".join(f"across / spacing at {p:,} points (q{QUANTILES})" for p in args.points)
+        + " |"
+    )
+    print("|---|---|---|" + "---|" * len(args.points))
+    for path in args.meshes:
+        mesh = trimesh.load(path, process=False, force="mesh")
+        vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+        diameter = np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))
+        for loop in boundary_loops(faces, len(vertices)):
+            if len(loop) <= 2 * MIN_STEPS:
+                continue
+            points = vertices[loop]
+            length = np.linalg.norm(np.diff(points, axis=0, append=points[:1]), axis=1).sum()
+            gaps = across(points)
+            cells = [
+                ", ".join(f"{q:.2f}" for q in np.quantile(gaps / np.sqrt(mesh.area / p), QUANTILES))
+                for p in args.points
+            ]
+            print(
+                f"| {path.split('/')[-1]} | {len(loop)} | {length / diameter:.2f} | "
+                + " | ".join(cells)
+                + " |"
+            )
+
+
+if __name__ == "__main__":
+    main()
