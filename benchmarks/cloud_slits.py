@@ -1,6 +1,6 @@
 """How wide a mesh's holes are, in the spacing of a cloud sampled from it.
 
-    python benchmarks/cloud_slits.py [MESH ...] [--points 3000 10000]
+    python benchmarks/cloud_slits.py [MESH ...] [--points 3000 10000] [--sew]
 
 A hole narrower than the sampling's spacing (closed lips, a slit) is invisible in a
 cloud: the points of its two lips are as close as neighbours across the surface, so any
@@ -10,6 +10,11 @@ Sumner figure with a boundary): its vertices, its length over the mesh's diamete
 the quantiles of the distance from each of its vertices to the nearest vertex of the
 same loop at least 8 steps away along it (across the hole), in spacings
 ``sqrt(area / points)`` of a uniform cloud of each size.
+
+With ``--sew``, each hole shorter than twice the diameter is sewn shut (its loop split
+at its two vertices farthest apart, the two halves zipped by the shorter diagonal), and
+our cloud operator on ``bench_cloud_operator.py``'s clouds (seed = the size) is printed
+against the mesh and against the sewn mesh: the first eigenvalue's ratio and ``med20``.
 """
 
 import argparse
@@ -18,7 +23,10 @@ import numpy as np
 import scipy.sparse as sp
 import trimesh
 from _common import DATA
+from bench_cloud_operator import eigenpairs, sample
 from scipy.sparse.csgraph import connected_components
+
+from sklearn_meshph import cotangent_laplacian, point_cloud_laplacian
 
 SHAPES = ["face/face-poses_1.obj", "head/head-01-anger.obj"]
 QUANTILES = (0.1, 0.25, 0.5, 0.75)
@@ -56,11 +64,69 @@ def across(points):
     return distance.min(axis=1)
 
 
+def sewn(vertices, loop):
+    """Triangles closing the hole of ``loop``: its two halves between the two vertices
+    farthest apart, zipped by the shorter diagonal at each step."""
+    points = vertices[loop]
+    first, last = np.unravel_index(
+        np.argmax(np.linalg.norm(points[:, None] - points[None], axis=2)), (len(loop),) * 2
+    )
+    rolled = np.roll(loop, -first)
+    cut = (last - first) % len(loop)
+    one, two = rolled[: cut + 1], np.append(rolled[cut:], rolled[0])[::-1]
+    triangles, a, b = [(one[0], one[1], two[1])], 1, 1
+    while a < len(one) - 2 or b < len(two) - 2:
+        ahead_one = np.linalg.norm(vertices[one[a + 1]] - vertices[two[b]])
+        ahead_two = np.linalg.norm(vertices[one[a]] - vertices[two[b + 1]])
+        if b == len(two) - 2 or (a < len(one) - 2 and ahead_one <= ahead_two):
+            triangles.append((one[a], one[a + 1], two[b]))
+            a += 1
+        else:
+            triangles.append((one[a], two[b + 1], two[b]))
+            b += 1
+    triangles.append((one[a], one[a + 1], two[b]))
+    return np.array(triangles)
+
+
+def sew_rows(path, sizes, n_eigenpairs=20):
+    """Our cloud operator against the mesh and against the mesh with its holes sewn."""
+    mesh = trimesh.load(path, process=False, force="mesh")
+    vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces)
+    diameter = np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))
+    patches = [
+        sewn(vertices, loop)
+        for loop in boundary_loops(faces, len(vertices))
+        if np.linalg.norm(np.diff(vertices[loop], axis=0), axis=1).sum() < 2 * diameter
+    ]
+    references = {}
+    for name, triangles in (("mesh", faces), ("sewn", np.vstack([faces, *patches]))):
+        L, M = cotangent_laplacian(vertices, triangles)
+        references[name] = eigenpairs(L, M, vertices, n_eigenpairs)[0][1:]
+    for n in sizes:
+        points, _ = sample(vertices, faces, n, seed=n)
+        L, M = point_cloud_laplacian(points)
+        ours = eigenpairs(L, M, points, n_eigenpairs)[0][1:]
+        cells = [
+            f"{ours[0] / values[0]:.3f}, {np.median(np.abs(ours - values) / values):.3f}"
+            for values in references.values()
+        ]
+        print(
+            f"| {path.split('/')[-1]} ({len(patches)} sewn) | {n:,} | " + " | ".join(cells) + " |"
+        )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("meshes", nargs="*", default=[str(DATA / "sumner" / s) for s in SHAPES])
     parser.add_argument("--points", type=int, nargs="+", default=[3000, 10000])
+    parser.add_argument("--sew", action="store_true", help="the operator against sewn holes")
     args = parser.parse_args()
+    if args.sew:
+        print("| mesh | points | against the mesh: l1, med20 | against it sewn: l1, med20 |")
+        print("|---|---|---|---|")
+        for path in args.meshes:
+            sew_rows(path, args.points)
+        return
     print(
         "| mesh | loop vertices | loop length / diameter | "
         + " | ".join(f"across / spacing at {p:,} points (q{QUANTILES})" for p in args.points)
