@@ -11,10 +11,15 @@ the quantiles of the distance from each of its vertices to the nearest vertex of
 same loop at least 8 steps away along it (across the hole), in spacings
 ``sqrt(area / points)`` of a uniform cloud of each size.
 
-With ``--sew``, each hole shorter than twice the diameter is sewn shut (its loop split
-at its two vertices farthest apart, the two halves zipped by the shorter diagonal), and
-our cloud operator on ``bench_cloud_operator.py``'s clouds (seed = the size) is printed
-against the mesh and against the sewn mesh: the first eigenvalue's ratio and ``med20``.
+With ``--sew``, each hole of more than 16 vertices, shorter than twice the diameter, is
+sewn shut (its loop split at its two vertices farthest apart, the two halves zipped by
+the shorter diagonal), and our cloud operator on ``bench_cloud_operator.py``'s clouds
+(seed = the size) is printed against the mesh and against the sewn mesh: the first
+eigenvalue's ratio and ``med20``; then where the mesh's first eigenfunction lives (its
+vertices above half its largest absolute value: how many, their share of its squared
+norm and of the area) and how many of them have another sheet within half a spacing (a
+vertex nearer than that whose distance along the edges from the function's peak differs
+by more than three times their distance plus a spacing).
 """
 
 import argparse
@@ -24,7 +29,8 @@ import scipy.sparse as sp
 import trimesh
 from _common import DATA
 from bench_cloud_operator import eigenpairs, sample
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.spatial import cKDTree
 
 from sklearn_meshph import cotangent_laplacian, point_cloud_laplacian
 
@@ -88,6 +94,42 @@ def sewn(vertices, loop):
     return np.array(triangles)
 
 
+def first_function(mesh, L, M, sizes):
+    """Where the mesh's first eigenfunction lives, and how much of it lies against
+    another sheet within half a spacing of each size."""
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    mass = np.asarray(M.diagonal())
+    f = eigenpairs(L, M, vertices, 1)[1][:, 1]
+    f = f if f.max() >= -f.min() else -f
+    region = np.flatnonzero(f > 0.5 * f.max())
+    edges = np.asarray(mesh.edges_unique)
+    lengths = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
+    graph = sp.coo_matrix((lengths, edges.T), shape=(len(vertices),) * 2).tocsr()
+    along = dijkstra(graph, directed=False, indices=region[np.argmax(f[region])])
+    tree = cKDTree(vertices)
+    counts = []
+    for n in sizes:
+        spacing = np.sqrt(mesh.area / n)
+        near = tree.query_ball_point(vertices[region], 0.5 * spacing)
+        counts.append(
+            sum(
+                any(
+                    abs(along[u] - along[v])
+                    > 3 * np.linalg.norm(vertices[u] - vertices[v]) + spacing
+                    for v in others
+                )
+                for u, others in zip(region, near, strict=True)
+            )
+        )
+    energy = mass * f**2
+    print(
+        f"first eigenfunction: {len(region)} vertices above half its largest value, "
+        f"{energy[region].sum() / energy.sum():.2f} of its squared norm, "
+        f"{mass[region].sum() / mass.sum():.2f} of the area; with another sheet within half "
+        + ", ".join(f"a spacing at {n:,} points: {c}" for n, c in zip(sizes, counts, strict=True))
+    )
+
+
 def sew_rows(path, sizes, n_eigenpairs=20):
     """Our cloud operator against the mesh and against the mesh with its holes sewn."""
     mesh = trimesh.load(path, process=False, force="mesh")
@@ -96,12 +138,15 @@ def sew_rows(path, sizes, n_eigenpairs=20):
     patches = [
         sewn(vertices, loop)
         for loop in boundary_loops(faces, len(vertices))
-        if np.linalg.norm(np.diff(vertices[loop], axis=0), axis=1).sum() < 2 * diameter
+        if len(loop) > 2 * MIN_STEPS
+        and np.linalg.norm(np.diff(vertices[loop], axis=0), axis=1).sum() < 2 * diameter
     ]
     references = {}
     for name, triangles in (("mesh", faces), ("sewn", np.vstack([faces, *patches]))):
         L, M = cotangent_laplacian(vertices, triangles)
         references[name] = eigenpairs(L, M, vertices, n_eigenpairs)[0][1:]
+        if name == "mesh":
+            first_function(mesh, L, M, sizes)
     for n in sizes:
         points, _ = sample(vertices, faces, n, seed=n)
         L, M = point_cloud_laplacian(points)
