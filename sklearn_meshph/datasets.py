@@ -387,8 +387,12 @@ def sample_point_cloud(
         points = _cut_holes(points, holes, n_removed, rng)
     if outliers:
         margin = diagonal / 4
-        stray = rng.uniform(low - margin, high + margin, size=(outliers, 3))
-        points = np.concatenate([points, stray])
+        with np.errstate(over="ignore"):
+            box = (low - margin, high + margin)
+            span = box[1] - box[0]
+        # numpy's uniform refuses (OverflowError) a box wider than float64's range.
+        stray = rng.uniform(*box, size=(outliers, 3)) if np.isfinite(span).all() else np.inf
+        points = np.concatenate([points, np.broadcast_to(stray, (outliers, 3))])
     if not np.isfinite(points).all():
         raise ValueError(
             f"the sample is not finite: the mesh's coordinates (bounding-box diagonal "

@@ -737,6 +737,27 @@ def test_hostile_off_files_are_refused_before_they_cost(tmp_path, content, messa
     assert time.perf_counter() - start < 20
 
 
+@pytest.mark.parametrize("declared", [301, 500, 10**12])
+def test_a_ply_of_points_cut_short_is_refused_like_a_mesh(tmp_path, declared):
+    """Found by an adversarial review: an ASCII PLY of vertices only whose header declares
+    more vertices than it holds was read as the points it holds, without a word."""
+    points = np.random.default_rng(0).normal(size=(300, 3))
+    header = (
+        f"ply\nformat ascii 1.0\nelement vertex {declared}\nproperty float x\n"
+        "property float y\nproperty float z\nend_header\n"
+    )
+    path = tmp_path / "short.ply"
+    path.write_text(header + "".join(f"{x} {y} {z}\n" for x, y, z in points))
+    with pytest.raises(
+        ValueError, match=rf"short.ply.*declares {declared} vertex rows and it holds 300"
+    ):
+        read_mesh_file(path, allow_points=True)
+    path.write_text(
+        header.replace(str(declared), "300") + path.read_text().split("end_header\n")[1]
+    )
+    assert read_mesh_file(path, allow_points=True).vertices.shape == (300, 3)
+
+
 def test_off_line_ends_and_byte_order_mark_as_trimesh_reads_them(tmp_path):
     """A lone \\r ends a line for trimesh (and Python): a file of them was refused as
     "cut short", and a stray \\r inside a vertex line made ours read other vertices."""

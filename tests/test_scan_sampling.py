@@ -142,6 +142,12 @@ def test_samples_beyond_float_range_or_memory_are_refused():
         sample_point_cloud(SPHERE, 10, noise=1e308, random_state=0)
     with pytest.raises(ValueError, match=r"more than the 10,000,000 points a sample may have"):
         sample_point_cloud(SPHERE, 10**9)
+    # Found by an adversarial review: the outliers' box beyond float64's range (finite
+    # corners, an infinite width) was numpy's OverflowError, not this ValueError.
+    huge = trimesh.Trimesh(SPHERE.vertices * 6e307, SPHERE.faces, process=False)
+    with pytest.raises(ValueError, match=r"noise=0.0 or outliers=1 leave float64's range"):
+        sample_point_cloud(huge, 100, outliers=1, random_state=0)
+    assert np.isfinite(sample_point_cloud(huge, 100, random_state=0)).all()
     with pytest.raises(ValueError, match=r"and 9999999 outliers\) is more than"):
         sample_point_cloud(SPHERE, 2, outliers=9_999_999)
     # The densest side's weights no longer overflow: nearly every point is on it.

@@ -345,6 +345,8 @@ def read_mesh_file(
             points = trimesh.load(source, file_type=file_type, process=False)
         except Exception as exc:  # as above
             raise ValueError(f"{invalid} (it cannot be parsed)") from exc
+        if file_type == "ply":  # read again: its own rows against its own header
+            _check_ply_counts(points, invalid)
         if isinstance(points, trimesh.PointCloud | trimesh.Trimesh) and len(points.vertices):
             return points
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
