@@ -16,8 +16,10 @@ import pytest
 
 from sklearn_meshph import (
     LaplacianEigenTransformer,
+    LowerStarPersistence,
     MeshCleaningWarning,
     make_shapes,
+    point_cloud_laplacian,
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import unit_box
@@ -128,6 +130,49 @@ def test_an_outlier_beyond_the_digits_of_the_shape_leaves_its_eigenvalues(far):
     np.testing.assert_allclose(field.eigenvalues, clean.eigenvalues, rtol=1e-6)
 
 
+def test_too_many_far_points_to_drop_are_warned_about_not_silently_merged():
+    """Found by an adversarial review: with 12% of the points at 1e100 the sphere (the
+    points within Tukey's fences, too many others to drop as far points) merged into one
+    point at the whole cloud's scale, and the field came from the scatter with no
+    warning. The 10% rule stands (a cluster of near-copies draws the fences around
+    itself too); the points it leaves unresolved are now reported and warned about."""
+    scatter = np.random.default_rng(2).normal(size=(200, 3)) * 1e100
+    cloud = np.vstack([sphere_points(), scatter])
+    message = "1500 points lie in a cluster that float64 resolves"
+    with pytest.warns(MeshCleaningWarning, match=message):
+        field = fields([cloud])[0]
+    assert field.cleaning.n_unresolved_points == 1500
+
+
+@pytest.mark.parametrize("far", [1e17, 1e100, 1e170, 1e300])
+def test_functions_given_a_far_point_keep_the_shapes_operator(far):
+    """Found by an adversarial review: point_cloud_laplacian and the (points, values)
+    pairs of LowerStarPersistence worked in the whole cloud's box: one point at 1e17
+    gave the sphere 16% less area, at 1e120 an all-zero operator, at 1e175 a raw
+    ZeroDivisionError from the compiled fans. The far point is now in no triangle."""
+    points = sphere_points(800)
+    L, M = point_cloud_laplacian(points)
+    L_far, M_far = point_cloud_laplacian(np.vstack([points, [[far, far / 3, 0.0]]]))
+    np.testing.assert_allclose(M_far.diagonal()[:-1], M.diagonal(), rtol=1e-9)
+    assert M_far.diagonal()[-1] == 0.0 and L_far[-1].nnz == 0
+    np.testing.assert_allclose(L_far[:-1, :-1].toarray(), L.toarray(), rtol=1e-9, atol=1e-12)
+    height = points[:, 2]
+    diagrams = LowerStarPersistence().fit_transform([(points, height)])[0]
+    far_diagrams = LowerStarPersistence().fit_transform(
+        [(np.vstack([points, [[far, far / 3, 0.0]]]), np.append(height, 2.0))]
+    )[0]
+    # The far point is a component of its own, born at 2.0 and never dying.
+    np.testing.assert_array_equal(far_diagrams[1], diagrams[1])
+
+
+def test_functions_given_too_many_far_points_refuse_them_naming_the_problem():
+    cloud = np.vstack([sphere_points(), np.random.default_rng(2).normal(size=(200, 3)) * 1e100])
+    with pytest.raises(ValueError, match="points: 1500 of the point cloud's 1700 points lie in"):
+        point_cloud_laplacian(cloud)
+    with pytest.raises(ValueError, match="sample 0: 1500 of the point cloud's 1700 points"):
+        LowerStarPersistence().fit_transform([(cloud, np.zeros(len(cloud)))])
+
+
 def test_the_component_kept_is_the_one_of_most_points_not_of_most_area():
     # 15 points scattered five radii out span more area than the sphere: the sphere
     # was dropped as far and the scatter kept.
@@ -138,7 +183,7 @@ def test_the_component_kept_is_the_one_of_most_points_not_of_most_area():
 
 
 def test_functions_given_equal_points_refuse_them_naming_the_sample():
-    from sklearn_meshph import LowerStarPersistence, lower_star_persistence, point_cloud_laplacian
+    from sklearn_meshph import lower_star_persistence
 
     points = np.vstack([sphere_points(), np.repeat(sphere_points()[:1], 12, axis=0)])
     with pytest.raises(ValueError, match=r"point cloud: 12 of the point cloud's points are equal"):

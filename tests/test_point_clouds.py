@@ -34,6 +34,7 @@ from sklearn_meshph import (
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import unit_box
+from sklearn_meshph.pointcloud.cleaning import clean_cloud
 from sklearn_meshph.pointcloud.graph import (
     GRAPH_NEIGHBORS,
     canonical_order,
@@ -280,9 +281,38 @@ LINE = np.linspace(0.0, 1.0, 50)[:, None]
     ],
     ids=["collinear", "two-lines", "all-equal"],
 )
-def test_degenerate_clouds_are_refused(points, message):
+@pytest.mark.parametrize("laplacian", ["cotangent", "graph", "random_walk"])
+def test_degenerate_clouds_are_refused(points, message, laplacian):
+    """Found by an adversarial review for the graph operators (the paper's preset):
+    mass 1 at every point kept the two lines, with a complex of no edge."""
     with pytest.raises(ValueError, match=message):
-        LaplacianEigenTransformer().fit_transform([points])
+        LaplacianEigenTransformer(laplacian=laplacian).fit_transform([points])
+
+
+@pytest.mark.parametrize("laplacian", ["graph", "normalized", "random_walk"])
+def test_a_graph_operator_keeps_the_points_and_complex_of_the_cotangent_one(laplacian):
+    """A helix's points are in local triangles only where its turns are near enough:
+    the graph operators kept every point (a complex of several components, whose
+    essential classes made the paper preset's distances infinite). They keep the
+    cotangent operator's points, and are rebuilt on them: rows summing to zero."""
+    t = np.linspace(0, 6 * np.pi, 200)
+    helix = np.c_[np.cos(t), np.sin(t), 0.1 * t]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshCleaningWarning)
+        (cotangent,) = LaplacianEigenTransformer().fit_transform([helix])
+        (graph,) = LaplacianEigenTransformer(laplacian=laplacian).fit_transform([helix])
+    assert cotangent.n_vertices < len(helix)
+    np.testing.assert_array_equal(graph.vertex_indices, cotangent.vertex_indices)
+    np.testing.assert_array_equal(graph.edges, cotangent.edges)
+    unit = unit_box(helix)[0]
+    options = dict(components="largest", index=0, weld=True)
+    clean, L, M, _, _ = clean_cloud(helix, unit, laplacian=laplacian, **options)
+    expected = CLOUD_LAPLACIANS[laplacian].value.build(unit[clean.vertex_indices])
+    # The operator of the kept points (in solve order: compare spectra).
+    spectrum = scipy.linalg.eigvalsh(L.toarray(), M.toarray())
+    np.testing.assert_allclose(
+        spectrum, scipy.linalg.eigvalsh(expected[0].toarray(), expected[1].toarray()), atol=1e-9
+    )
 
 
 def test_a_plane_is_a_surface_patch():

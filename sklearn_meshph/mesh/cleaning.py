@@ -73,6 +73,13 @@ class CleaningReport:
         sampling (stray points, small far clusters; counted among the other components).
         Input points that coincide with a far point are far points, not welded ones.
         Always warned about, whatever their share: an outlier is a fact about the data.
+    n_unresolved_points : int
+        Points of a point cloud that float64 cannot resolve at the whole cloud's scale:
+        a cluster over 4.5e9 times smaller than the cloud's box, with over 10% of the
+        points outside it (too many to drop as far points; see
+        :func:`sklearn_meshph.pointcloud.graph.cloud_unit_box`). Either the shape with
+        too many far points around it, or near-copies of one point: they may merge
+        into few points, which is not reported as a loss. Always warned about.
     """
 
     n_input_vertices: int
@@ -86,25 +93,28 @@ class CleaningReport:
     vertex_share: float
     area_share: float
     n_far_points: int = 0
+    n_unresolved_points: int = 0
 
     @property
     def dropped(self) -> bool:
-        """Whether anything was dropped (welding is not dropping)."""
+        """Whether anything was dropped (welding is not dropping) or left unresolved."""
         return bool(
             self.n_degenerate_faces
             or self.n_repeated_faces
             or self.n_unreferenced_vertices
             or self.n_other_components
+            or self.n_unresolved_points
         )
 
     @property
     def significant(self) -> bool:
         """Whether more than :data:`LOSS_THRESHOLD` of the vertices or area was dropped,
-        or any far point of a cloud."""
+        or any far or unresolved point of a cloud."""
         return (
             self.vertex_share > LOSS_THRESHOLD
             or self.area_share > LOSS_THRESHOLD
             or self.n_far_points > 0
+            or self.n_unresolved_points > 0
         )
 
     def message(self, place: str = "mesh") -> str:
@@ -120,6 +130,14 @@ class CleaningReport:
             + (
                 f", of which {self.n_far_points} far points (outliers for the cloud's sampling)"
                 if self.n_far_points
+                else ""
+            )
+            + (
+                f"; {self.n_unresolved_points} points lie in a cluster that float64 "
+                "resolves to worse than 1e-6 of its size at the cloud's scale (it may "
+                "have merged into few points; over 10% of the points lie far from it: "
+                "if the cluster is the shape, drop those)"
+                if self.n_unresolved_points
                 else ""
             )
         )

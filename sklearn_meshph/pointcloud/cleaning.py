@@ -9,17 +9,23 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh import DEGENERATE_SINE, unit_box
+from ..mesh import DEGENERATE_SINE
 from ..mesh.cleaning import CleaningReport, CleanMesh
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
 from ..mesh.welding import WELD_RTOL, exact_representatives, weld_groups
 from ._triangulation import LOCAL_NEIGHBORS, nearest, nearest_within
-from .graph import canonical_order, neighbourhood_components, sparse_outliers, unique_edges
+from .graph import (
+    canonical_order,
+    neighbourhood_components,
+    sparse_outliers,
+    unique_edges,
+    within_fences,
+)
 from .laplacians import CLOUD_LAPLACIANS
 from .validation import MIN_POINTS
 
-__all__ = ["FAR_BOX_RATIO", "clean_cloud", "cloud_unit_box"]
+__all__ = ["clean_cloud"]
 
 
 def _refuse_few(n_distinct: int, place: str) -> None:
@@ -39,51 +45,6 @@ def _refuse_degenerate(points: np.ndarray, place: str) -> None:
             f"{place}: the point cloud is degenerate: its {len(points)} distinct points "
             "lie on one line, which bounds no surface"
         )
-
-
-def _within_fences(points: np.ndarray) -> np.ndarray:
-    """The points within Tukey's fences (three interquartile ranges beyond the
-    quartiles, per coordinate): far points are not dropped yet when the cloud is tested
-    for lying on a line, and one outlier 1e15 times the shape's size away would make
-    any shape a line."""
-    low, high = np.percentile(points, [25, 75], axis=0)
-    reach = 3.0 * (high - low)
-    inside = np.all((points >= low - reach) & (points <= high + reach), axis=1)
-    return points[inside] if np.count_nonzero(inside) >= MIN_POINTS else points
-
-
-#: A cloud whose box is this many times the box of its points within Tukey's fences is
-#: put in the unit box of those points (see :func:`cloud_unit_box`).
-FAR_BOX_RATIO = 1e6
-#: ... and when at most this share of its points is outside those fences.
-FAR_SHARE = 0.1
-# Unit-box coordinates of far points are clipped here (they are dropped as far points).
-_FAR_CLIP = 1e12
-
-
-def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """:func:`sklearn_meshph.mesh._geometry.unit_box` of a cloud, robust to far points.
-
-    The unit box of every point, unless the box is more than ``FAR_BOX_RATIO`` times
-    that of the points within Tukey's fences, which have some extent, and at most
-    ``FAR_SHARE`` of the points are outside them (else the fences were drawn around a
-    cluster of duplicates, not the shape). One outlier at 1e100 times the shape's size
-    centred the whole box so far away that subtracting its centre cancelled every digit
-    of the shape's coordinates. The box is then that of the points within the
-    fences, and the far points' coordinates in it are clipped at ``_FAR_CLIP`` (they are
-    dropped as far points; clipping keeps them finite and far).
-    """
-    unit, scale = unit_box(points)
-    bulk = _within_fences(points)
-    outside = len(points) - len(bulk)
-    # Far points are few. When many points are outside, the fences were drawn around a
-    # cluster of (near-)duplicates, not the shape: its box is not the shape's.
-    if outside == 0 or outside > FAR_SHARE * len(points):
-        return unit, scale
-    moved, bulk_scale = unit_box(points, bulk)
-    if not (float(np.ptp(bulk, axis=0).max()) > 0.0 and bulk_scale * FAR_BOX_RATIO < scale):
-        return unit, scale
-    return np.clip(moved, -_FAR_CLIP, _FAR_CLIP), bulk_scale
 
 
 #: Points closer than this times the cloud's reach (the median distance from a point to
@@ -216,7 +177,16 @@ def _edges(triangles: np.ndarray, renumber: np.ndarray) -> np.ndarray:
     return unique_edges(a, b, int(renumber.max()) + 1)
 
 
-def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | None, weld: bool):
+def clean_cloud(
+    points,
+    unit,
+    *,
+    laplacian: str,
+    components: str,
+    index: int | None,
+    weld: bool,
+    unresolved=None,
+):
     """Merge coincident points, drop far ones, build the operator, keep one component.
 
     The policy, in order (the analogue of :func:`sklearn_meshph.clean_mesh`):
@@ -240,10 +210,16 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
        them, nearer than the far ones: :func:`.graph.sparse_outliers`);
     3. the operator of ``laplacian`` (:data:`.laplacians.CLOUD_LAPLACIANS`) is built on
        the kept points in the unit box;
-    4. points in no local triangle (zero mass: their neighbours on their own sheet too
-       few or on a line) are dropped as unreferenced;
-    5. connected components of the operator (clusters that no local triangle joins)
-       follow ``components`` as in step 2.
+    4. points in no local triangle (their neighbours on their own sheet too few or on
+       a line; zero mass for the cotangent operator) are dropped as unreferenced,
+       whatever the operator;
+    5. connected components of the complex (clusters that no local triangle joins)
+       follow ``components`` as in step 2. A graph operator is then built again on the
+       points kept (restricted to some of its nodes, a graph Laplacian is not theirs).
+
+    ``unresolved``: :func:`.graph.cloud_unit_box`'s mask of the points its ``unit``
+    box cannot resolve, counted in the report (``n_unresolved_points``, always warned
+    about).
 
     Returns ``(clean, L, M, solve_points, to_output)``: ``clean`` a
     :class:`CleanMesh` without faces whose vertices are the kept input points in input
@@ -270,20 +246,30 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
         knn = nearest_within(canonical[distinct], knn, still, LOCAL_NEIGHBORS)
         distinct = distinct[still]
         _refuse_few(len(distinct), place)
-    _refuse_degenerate(_within_fences(canonical[distinct]), place)
+    _refuse_degenerate(within_fences(canonical[distinct]), place)
     near, L, M, triangles, n_far, far_share = _far_components(
         canonical[distinct], knn, laplacian, components, place
     )
     solve_points = canonical[distinct[near]]
     mass = M.diagonal()
-    referenced = mass > 0
+    # A point in no local triangle is on no surface: the complex leaves it alone (and a
+    # graph Laplacian, whose mass is 1 everywhere, would keep it).
+    in_triangle = np.zeros(len(solve_points), dtype=bool)
+    in_triangle[triangles.ravel()] = True
+    referenced = (mass > 0) & in_triangle
     if np.count_nonzero(referenced) < MIN_POINTS:
         raise ValueError(
             f"{place}: the point cloud is degenerate: fewer than {MIN_POINTS} of its "
             "points are in a local triangle (their neighbourhoods lie on lines)"
         )
-    structure = L.tocoo()
-    pairs = np.column_stack([structure.row, structure.col]).astype(np.int64)
+    # The components of the complex (for the cotangent operator, those of its
+    # couplings: the same edges); a graph operator may join what no triangle joins.
+    rebuild = getattr(CLOUD_LAPLACIANS[laplacian].value, "build", None)
+    if rebuild is None:
+        structure = L.tocoo()
+        pairs = np.column_stack([structure.row, structure.col]).astype(np.int64)
+    else:
+        pairs = _edges(triangles, np.arange(len(solve_points)))
     _, labels = connected_components(len(solve_points), pairs)
     real = np.unique(labels[referenced])
     kept = referenced.copy()
@@ -301,9 +287,12 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
     area_share = far_share + (1.0 - far_share) * area_share
     n_kept = int(np.count_nonzero(kept))
     if not kept.all():
-        L = L[kept][:, kept].tocsr()
-        M = sp.diags(mass[kept])
         solve_points = solve_points[kept]
+        if rebuild is None:
+            L = L[kept][:, kept].tocsr()
+            M = sp.diags(mass[kept])
+        else:
+            L, M = rebuild(solve_points)
     kept_distinct = np.flatnonzero(near)[kept]  # positions among the distinct points
 
     # Back to input order: each kept point is named by its input index.
@@ -342,6 +331,7 @@ def clean_cloud(points, unit, *, laplacian: str, components: str, index: int | N
         vertex_share=(n_vertices - n_kept) / n_vertices,
         area_share=area_share,
         n_far_points=n_far_inputs,
+        n_unresolved_points=0 if unresolved is None else int(np.count_nonzero(unresolved)),
     )
     clean = CleanMesh(
         vertices=np.ascontiguousarray(points[vertex_indices]),

@@ -20,20 +20,27 @@ import scipy.sparse as sp
 from ..mesh import unit_box
 from ..mesh.graph import connected_components
 from ._triangulation import nearest, tangent_fans
+from .validation import MIN_POINTS
 
 __all__ = [
+    "FAR_BOX_RATIO",
     "FAR_EDGE_RATIO",
+    "FAR_SHARE",
     "GRAPH_NEIGHBORS",
     "OUTLIER_RATIO",
     "canonical_order",
+    "cloud_unit_box",
     "edge_adjacency",
     "knn_graph",
     "nearest",
     "neighbourhood_components",
     "refuse_coincident",
+    "refuse_unresolved",
     "sparse_outliers",
     "surface_graph",
     "unique_edges",
+    "unresolved_phrase",
+    "within_fences",
 ]
 
 #: Neighbours per point of the graph that lower-star persistence filters on a cloud.
@@ -46,6 +53,95 @@ FAR_EDGE_RATIO = 8.0
 #: A point whose neighbourhood radius is more than this many times its neighbours' is
 #: an outlier for the sampling around it (:func:`sparse_outliers`).
 OUTLIER_RATIO = 3.0
+
+
+def within_fences(points: np.ndarray) -> np.ndarray:
+    """The points within Tukey's fences (three interquartile ranges beyond the
+    quartiles, per coordinate), or all of them when fewer than ``MIN_POINTS`` are: far
+    points are not dropped yet when the cloud is tested for lying on a line, and one
+    outlier 1e15 times the shape's size away would make any shape a line."""
+    return points[_inside_fences(points)]
+
+
+def _inside_fences(points: np.ndarray) -> np.ndarray:
+    low, high = np.percentile(points, [25, 75], axis=0)
+    reach = 3.0 * (high - low)
+    inside = np.all((points >= low - reach) & (points <= high + reach), axis=1)
+    return inside if np.count_nonzero(inside) >= MIN_POINTS else np.ones(len(points), bool)
+
+
+#: A cloud whose box is this many times the box of its points within Tukey's fences is
+#: put in the unit box of those points (see :func:`cloud_unit_box`).
+FAR_BOX_RATIO = 1e6
+#: ... and when at most this share of its points is outside those fences.
+FAR_SHARE = 0.1
+#: Otherwise the points within the fences are unresolved when float64's resolution in
+#: the whole cloud's box is more than this fraction of their own box (a box over
+#: 4.5e9 times smaller than the cloud's).
+UNRESOLVED = 1e-6
+# Unit-box coordinates of far points are clipped here (they are dropped as far points).
+_FAR_CLIP = 1e12
+
+
+def cloud_unit_box(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """:func:`sklearn_meshph.mesh.unit_box` of a cloud, robust to far points.
+
+    The unit box of every point, unless the box is more than ``FAR_BOX_RATIO`` times
+    that of the points within Tukey's fences, which have some extent, and at most
+    ``FAR_SHARE`` of the points are outside them. One outlier at 1e100 times the
+    shape's size centred the whole box so far away that subtracting its centre
+    cancelled every digit of the shape's coordinates. The box is then that of the
+    points within the fences, and the far points' coordinates in it are clipped at
+    ``_FAR_CLIP`` (they are dropped as far points; clipping keeps them finite and far).
+
+    With more points outside the fences, which is the shape is a guess: a shape with
+    many far points around it, or a cluster of near-copies of one point with the shape
+    far around it (the fences are drawn around whichever holds most points). The whole
+    cloud's box is kept, and the third value, a mask, says which points it leaves
+    unresolved: those within the fences when float64 resolves their box only to more
+    than ``UNRESOLVED`` of its size (they may merge into few points). Callers refuse
+    or report them; the mask is empty of ``True`` otherwise.
+
+    Returns ``(unit, scale, unresolved)``.
+    """
+    unit, scale = unit_box(points)
+    none = np.zeros(len(points), dtype=bool)
+    inside = _inside_fences(points)
+    bulk = points[inside]
+    outside = len(points) - len(bulk)
+    if outside == 0:
+        return unit, scale, none
+    moved, bulk_scale = unit_box(points, bulk)
+    if not (float(np.ptp(bulk, axis=0).max()) > 0.0 and bulk_scale * FAR_BOX_RATIO < scale):
+        return unit, scale, none
+    # Far points are few. When many points are outside, the fences may have been drawn
+    # around a cluster of (near-)duplicates, not the shape: its box is not the shape's.
+    if outside > FAR_SHARE * len(points):
+        resolution = np.finfo(np.float64).eps * (scale / bulk_scale)
+        return unit, scale, inside if resolution > UNRESOLVED else none
+    return np.clip(moved, -_FAR_CLIP, _FAR_CLIP), bulk_scale, none
+
+
+def refuse_unresolved(unresolved: np.ndarray, place: str) -> None:
+    """A ``ValueError`` naming ``place`` when :func:`cloud_unit_box` left points
+    unresolved: a function given the points themselves does not guess which are the
+    shape."""
+    if unresolved.any():
+        raise ValueError(
+            f"{place}: {unresolved_phrase(unresolved)}; drop the far points (or the cluster)"
+        )
+
+
+def unresolved_phrase(unresolved: np.ndarray) -> str:
+    """What :func:`cloud_unit_box`'s ``unresolved`` mask means, in words."""
+    n, kept = len(unresolved), int(np.count_nonzero(unresolved))
+    return (
+        f"{kept} of the point cloud's {n} points lie in a box over "
+        f"{UNRESOLVED / np.finfo(np.float64).eps:.2g} times smaller than the cloud's, "
+        f"which float64 resolves to worse than {UNRESOLVED:.0e} of their size at the "
+        f"cloud's scale, and the {n - kept} others "
+        f"(over {100 * FAR_SHARE:.3g}% of the points) are too many to drop as far points"
+    )
 
 
 def canonical_order(points: np.ndarray) -> np.ndarray:
@@ -81,7 +177,9 @@ def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndar
     if n < 2:
         return np.empty((0, 2), dtype=np.int64)
     order = canonical_order(points)
-    _, indices = nearest(unit_box(points[order])[0], n_neighbors)
+    unit, _, unresolved = cloud_unit_box(points[order])
+    refuse_unresolved(unresolved, "points")
+    _, indices = nearest(unit, n_neighbors)
     return unique_edges(np.repeat(order, indices.shape[1]), order[indices.ravel()], n)
 
 
@@ -114,7 +212,9 @@ def surface_graph(points: np.ndarray, place: str = "point cloud") -> np.ndarray:
         return np.empty((0, 2), dtype=np.int64)
     refuse_coincident(points, place)
     order = canonical_order(points)
-    triangles = tangent_fans(unit_box(points[order])[0])[0]
+    unit, _, unresolved = cloud_unit_box(points[order])
+    refuse_unresolved(unresolved, place)
+    triangles = tangent_fans(unit)[0]
     a = order[triangles[:, [0, 1, 2]].ravel()]
     b = order[triangles[:, [1, 2, 0]].ravel()]
     return unique_edges(a, b, len(points))

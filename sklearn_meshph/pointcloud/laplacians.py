@@ -25,11 +25,18 @@ import scipy.sparse as sp
 
 from .._param_validation import Interval, validate_params
 from .._registry import Option, Registry
-from ..mesh import unit_box, unit_box_mass
+from ..mesh import unit_box_mass
 from ..mesh.graph_laplacians import from_combinatorial, normalized_laplacian, random_walk_laplacian
 from ..mesh.validation import check_vertices
 from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
-from .graph import GRAPH_NEIGHBORS, edge_adjacency, knn_graph, refuse_coincident
+from .graph import (
+    GRAPH_NEIGHBORS,
+    cloud_unit_box,
+    edge_adjacency,
+    knn_graph,
+    refuse_coincident,
+    refuse_unresolved,
+)
 from .validation import MIN_POINTS
 
 __all__ = [
@@ -124,7 +131,8 @@ def point_cloud_laplacian(
     refuse_coincident(points, "points")
     # In the unit box, as the eigen stage builds it: the same operator at any scale
     # (the stiffness is scale-free, the mass scaled back).
-    unit, scale = unit_box(points)
+    unit, scale, unresolved = cloud_unit_box(points)
+    refuse_unresolved(unresolved, "points")
     L, M, _ = cloud_operator(unit, n_neighbors)
     return L, sp.diags(unit_box_mass(M.diagonal(), scale, "point_cloud_laplacian"))
 
@@ -303,6 +311,9 @@ def _with_fans(build):
     def operator(points, *, knn=None):
         return (*build(points), tangent_fans(points, knn=knn)[0])
 
+    # The operator alone, for cleaning to rebuild on the points it keeps (a graph
+    # Laplacian restricted to some of its nodes is not theirs).
+    operator.build = build
     return operator
 
 

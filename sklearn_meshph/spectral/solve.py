@@ -17,7 +17,8 @@ from ..mesh import unit_box
 from ..mesh.cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_checked
 from ..mesh.graph import connected_components
 from ..mesh.validation import where
-from ..pointcloud.cleaning import clean_cloud, cloud_unit_box
+from ..pointcloud.cleaning import clean_cloud
+from ..pointcloud.graph import cloud_unit_box
 from .eigensolver import COMPONENTS, DENSE_MAX_NODES, DENSE_MAX_VERTICES, generalized_eigenpairs
 from .laplacians import GRAPH_LAPLACIANS, LAPLACIANS
 
@@ -88,10 +89,11 @@ def cloud_eigenpairs(points, settings: SolveSettings, n_eigenpairs, seed, index,
     local triangulations estimate), as for meshes.
     """
     refuse_all_components(settings.components, index, "point cloud")
-    unit, scale = cloud_unit_box(points)
+    unit, scale, unresolved = cloud_unit_box(points)
     clean, L, M, solve_points, to_output = clean_cloud(
         points,
         unit,
+        unresolved=unresolved,
         laplacian=settings.laplacian,
         components=settings.components,
         index=index,
