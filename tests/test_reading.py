@@ -20,6 +20,7 @@ from sklearn_meshph import check_mesh, load_mesh_folder
 from sklearn_meshph.datasets import MESH_EXTENSIONS, SkippedFilesWarning
 from sklearn_meshph.mesh import reading
 from sklearn_meshph.mesh.reading import read_mesh_file, split_compression
+from sklearn_meshph.pointcloud.reading import read_sample_file
 
 COMPRESSORS = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}
 
@@ -473,6 +474,44 @@ def test_text_point_cloud_refuses_long_lines_and_carriage_returns(tmp_path):
         read_point_cloud_file(underscore)
 
 
+@pytest.mark.parametrize("compress", [gzip.compress, lambda data: data])
+def test_a_ply_declaring_too_many_rows_is_refused_before_it_is_read(tmp_path, compress):
+    """Found by an adversarial review: a 2 MB .ply.gz of 180 million zero vertices (2 GiB
+    decompressed, within the bytes limit) took 12.5 GB in trimesh, then was called "not
+    parsable". Its header is read first; the rest is never decompressed."""
+    from sklearn_meshph.mesh.reading import MAX_PLY_ROWS
+
+    header = (
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 178869589\n"
+        b"property float x\nproperty float y\nproperty float z\nend_header\n"
+    )
+    path = tmp_path / ("bomb.ply.gz" if compress is gzip.compress else "bomb.ply")
+    path.write_bytes(compress(header + bytes(12 * 1024**2)))
+    message = rf"declares 178869589 vertex rows, more than MAX_PLY_ROWS \({MAX_PLY_ROWS}\)"
+    _, peak = traced_peak(lambda: read_sample_file(path, "sample 0"), "sample 0: .*" + message)
+    assert peak < 4 * 1024**2
+
+
+def test_text_point_clouds_are_bounded_by_points_and_columns(tmp_path, monkeypatch):
+    """Found by an adversarial review: 782 KB of gzip held 89 million equal points (3
+    minutes to read, then 12 GB in the eigen stage), and 4,096 lines of 32,000 numbers
+    took 1.8 GB to parse: the bytes limit bounded neither."""
+    from sklearn_meshph.pointcloud import reading
+
+    assert reading.MAX_POINTS == 1 << 24 and reading.MAX_COLUMNS == 64
+    wide = tmp_path / "wide.xyz.gz"
+    wide.write_bytes(gzip.compress(b"1 " * 100 + b"\n" + b"1 " * 100 + b"\n"))
+    with pytest.raises(ValueError, match=r"line 1 holds 100 numbers, more than MAX_COLUMNS"):
+        reading.read_point_cloud_file(wide, "sample 3")
+    many = tmp_path / "many.xyz.gz"
+    many.write_bytes(gzip.compress(b"0 0 0\n" * 3000))
+    monkeypatch.setattr(reading, "MAX_POINTS", 2000)
+    with pytest.raises(ValueError, match=r"sample 3: .* more than MAX_POINTS \(2000\) points"):
+        reading.read_point_cloud_file(many, "sample 3")
+    monkeypatch.setattr(reading, "MAX_POINTS", 3000)
+    assert reading.read_point_cloud_file(many).shape == (3000, 3)
+
+
 def test_text_point_cloud_names_what_is_not_a_regular_file(tmp_path):
     from sklearn_meshph.pointcloud.reading import read_point_cloud_file
 
@@ -748,9 +787,8 @@ def test_a_ply_of_points_cut_short_is_refused_like_a_mesh(tmp_path, declared):
     )
     path = tmp_path / "short.ply"
     path.write_text(header + "".join(f"{x} {y} {z}\n" for x, y, z in points))
-    with pytest.raises(
-        ValueError, match=rf"short.ply.*declares {declared} vertex rows and it holds 300"
-    ):
+    held = ", more than MAX_PLY_ROWS" if declared > 1 << 24 else " and it holds 300"
+    with pytest.raises(ValueError, match=rf"short.ply.*declares {declared} vertex rows{held}"):
         read_mesh_file(path, allow_points=True)
     path.write_text(
         header.replace(str(declared), "300") + path.read_text().split("end_header\n")[1]

@@ -32,6 +32,7 @@ from .text import long_line_offset
 __all__ = [
     "COMPRESSIONS",
     "MAX_DECOMPRESSED_SIZE",
+    "MAX_PLY_ROWS",
     "MAX_TEXT_LINE",
     "MAX_TEXT_LINES",
     "MAX_TEXT_TOKENS",
@@ -66,6 +67,14 @@ MAX_TEXT_LINES = 8 * 1024**2
 #: parsers copy a line several times over (a 291 KB .obj.gz of one 300 MB line of spaces
 #: took 890 MB), and no face or vertex line comes near it.
 MAX_TEXT_LINE = 1 << 22
+
+#: Most rows an element of a PLY file may declare (vertices, faces): 16 Mi. trimesh
+#: reads a binary PLY into arrays several times over (a 2 MB .ply.gz of 180 million
+#: vertices took 12.5 GB before it was refused): the counts its header declares are
+#: checked before the file is decompressed or parsed, as the bytes are.
+MAX_PLY_ROWS = 1 << 24
+# Bytes of a PLY file's start read for its header (a longer header is refused).
+_PLY_HEADER = 1 << 16
 
 #: File name endings of the compressed formats read, and their standard-library openers.
 COMPRESSIONS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
@@ -156,6 +165,37 @@ def decompress(path, compression: str, place: str, limit: int, what: str = "mesh
             buffer.write(chunk)
     buffer.seek(0)
     return buffer
+
+
+def _check_ply_header(path: str, compression, place: str) -> None:
+    """Refuse a PLY file whose header declares an element of more than
+    ``MAX_PLY_ROWS`` rows, reading (decompressing) only its first ``_PLY_HEADER`` bytes."""
+    if compression is None:
+        with open(path, "rb") as stream:
+            head = stream.read(_PLY_HEADER)
+    else:
+        with LimitedReader(path, compression, place, _PLY_HEADER, "mesh file") as stream:
+            head = b""
+            while len(head) < _PLY_HEADER:
+                try:
+                    chunk = stream.read(_PLY_HEADER - len(head))
+                except ValueError:
+                    return  # not valid compressed data: reported when decompressed
+                if not chunk:
+                    break
+                head += chunk
+    end = head.find(b"end_header")
+    if end < 0:
+        return  # no header within reach: trimesh refuses it
+    for line in head[:end].splitlines():
+        words = line.split()
+        if len(words) == 3 and words[0] == b"element" and words[2].isdigit():
+            if int(words[2]) > MAX_PLY_ROWS:
+                raise ValueError(
+                    f"{place}: mesh file {path!r} declares {int(words[2])} "
+                    f"{words[1].decode('latin-1')} rows, more than MAX_PLY_ROWS "
+                    f"({MAX_PLY_ROWS}); refusing to read it"
+                )
 
 
 def _is_text(buffer, file_type: str) -> bool:
@@ -275,7 +315,8 @@ def read_mesh_file(
     ------
     ValueError
         If the path does not exist or is not a file, is not one of ``MESH_FORMATS`` or
-        holds a zip archive, or decompresses beyond the limit; or if the file is not a
+        holds a zip archive, or decompresses beyond the limit; if a PLY header declares
+        an element of more than ``MAX_PLY_ROWS`` rows; or if the file is not a
         valid mesh: empty, not valid compressed data, not parsable in its format, or
         without a triangle. The message is one line naming the file.
     """
@@ -301,6 +342,8 @@ def read_mesh_file(
             "archives and containers are refused"
         )
     limit = MAX_DECOMPRESSED_SIZE if max_decompressed_size is None else max_decompressed_size
+    if file_type == "ply":
+        _check_ply_header(path, compression, place)
     if compression is None:
         if os.path.getsize(path) > limit:
             raise ValueError(

@@ -24,6 +24,9 @@ import numpy as np
 from ..mesh.reading import LimitedReader, read_mesh_file, split_compression
 
 __all__ = [
+    "MAX_COLUMNS",
+    "MAX_LINE_LENGTH",
+    "MAX_POINTS",
     "MAX_SKIPPED_LINES",
     "MAX_TEXT_SIZE",
     "POINT_CLOUD_FORMATS",
@@ -44,10 +47,19 @@ _BLOCK = 4096  # lines parsed at a time
 MAX_SKIPPED_LINES = 1_000_000
 _SKIPPED_PER_POINT = 4
 
-#: Longest line read, in bytes: thousands of numbers, far more than a point's columns.
-#: A longer line (a file with carriage returns only for line ends, or junk) is refused
-#: before it is held in memory.
-MAX_LINE_LENGTH = 64 * 1024
+#: Longest line read, in bytes: a hundred numbers, more than a point's columns. A
+#: longer line (a file with carriage returns only for line ends, or junk) is refused
+#: before it is held in memory; a block of lines parsed at once is at most 16 MiB.
+MAX_LINE_LENGTH = 4096
+
+#: Most numbers on a line (coordinates, then normals, colours...): a file of 4,096
+#: points of 32,000 numbers each took 1.8 GB to parse.
+MAX_COLUMNS = 64
+
+#: Most points of a text point-cloud file (16 Mi): the bytes limit alone let 782 KB of
+#: gzip hold 89 million equal points, read in 3 minutes into 2 GB, then 12 GB in the
+#: eigen stage. Counted on the first pass, refused as soon as it is passed.
+MAX_POINTS = 1 << 24
 
 
 @contextlib.contextmanager
@@ -119,8 +131,10 @@ def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
     ------
     ValueError
         If the file does not exist, is empty, is larger than ``MAX_TEXT_SIZE`` (once
-        decompressed), or a line does not hold at least three numbers (the same count
-        on every line). The message is one line naming the file (and the line).
+        decompressed), holds more than ``MAX_POINTS`` points, a line longer than
+        ``MAX_LINE_LENGTH`` bytes or more than ``MAX_COLUMNS`` numbers, or a line does
+        not hold at least three numbers (the same count on every line). The message is
+        one line naming the file (and the line).
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
@@ -140,7 +154,17 @@ def read_point_cloud_file(path, place: str = "point cloud") -> np.ndarray:
                 continue
             if not n_points:
                 width = len(text.split())
+                if width > MAX_COLUMNS:
+                    raise ValueError(
+                        f"{place}: cannot read point cloud file {path!r}: line {number} "
+                        f"holds {width} numbers, more than MAX_COLUMNS ({MAX_COLUMNS})"
+                    )
             n_points += 1
+            if n_points > MAX_POINTS:
+                raise ValueError(
+                    f"{place}: point cloud file {path!r} holds more than MAX_POINTS "
+                    f"({MAX_POINTS}) points; refusing to read it"
+                )
     if not n_points:
         raise ValueError(f"{place}: point cloud file {path!r} holds no points")
     if width < 3:
