@@ -110,5 +110,10 @@ def check_input(sample, *, index: int | None = None) -> tuple[np.ndarray, np.nda
     :func:`sklearn_meshph.check_point_cloud`. Any other object is a ``TypeError``
     naming the sample and the accepted kinds.
     """
-    sample = _read(sample, index)
-    return _kind_of(sample, index).check(sample, index=index)
+    read = _read(sample, index)
+    if read is sample:
+        return _kind_of(sample, index).check(sample, index=index)
+    try:
+        return _kind_of(read, index).check(read, index=index)
+    except ValueError as exc:  # the problem is the file's: name it
+        raise ValueError(f"{exc} (read from {os.fspath(sample)!r})") from exc

@@ -321,6 +321,16 @@ def test_a_plane_is_a_surface_patch():
     assert field.cleaning is None and field.eigenvalues[0] > 0
 
 
+def test_a_file_whose_content_is_refused_is_named(tmp_path):
+    """Found by an adversarial review: a NaN in a .xyz given by path was reported as
+    "sample 1: point 2 has a non-finite coordinate", naming no file (the CLI did)."""
+    path = tmp_path / "scan.xyz"
+    path.write_text("0 0 0\n1 0 0\nnan 1 0\n0 0 1\n1 1 1\n")
+    message = r"sample 1: point 2 has a non-finite coordinate .*read from '.*scan\.xyz'"
+    with pytest.raises(ValueError, match=message):
+        LaplacianEigenTransformer().fit_transform([MESH, path])
+
+
 def test_point_cloud_objects_and_files(tmp_path, sampled):
     expected = fields([sampled], eigen_index=1)[0].values
     (from_object,) = fields([trimesh.PointCloud(sampled)], eigen_index=1)
