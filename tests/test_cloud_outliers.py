@@ -165,6 +165,18 @@ def test_functions_given_a_far_point_keep_the_shapes_operator(far):
     np.testing.assert_array_equal(far_diagrams[1], diagrams[1])
 
 
+def test_point_cloud_laplacian_takes_a_point_cloud_object():
+    """Found by an adversarial review: trimesh.PointCloud, which the estimators take,
+    was refused as "dtype object and shape ()"."""
+    import trimesh
+
+    points = sphere_points(300)
+    L, M = point_cloud_laplacian(trimesh.PointCloud(points))
+    L_array, M_array = point_cloud_laplacian(points)
+    assert (L != L_array).nnz == 0
+    np.testing.assert_array_equal(M.diagonal(), M_array.diagonal())
+
+
 def test_functions_given_too_many_far_points_refuse_them_naming_the_problem():
     cloud = np.vstack([sphere_points(), np.random.default_rng(2).normal(size=(200, 3)) * 1e100])
     with pytest.raises(ValueError, match="points: 1500 of the point cloud's 1700 points lie in"):

@@ -195,6 +195,12 @@ def test_a_graph_is_returned_as_is_and_checked_when_made():
         ((3, [[0, 1]], [1e-310]), ValueError, "at least 2.23e-308 .*subnormal.*got 1e-310"),
         ((3, [[0, 1]], [1.0, 2.0]), ValueError, "1 edges but 2 weights"),
         ((3, [[0.0, 1.0]], [1.0]), TypeError, "edges must be integers"),
+        # Found by an adversarial review (bare TypeError and OverflowError before):
+        ((3, [[0, 1]], [1 + 1j]), TypeError, "edge weights must be real numbers"),
+        ((3, [[0, 1]], np.array([1 + 0j])), TypeError, "edge weights must be real numbers"),
+        ((3, [[0, 1]], [object()]), TypeError, "edge weights must be real numbers"),
+        ((3, [[0, 1]], [10**400]), ValueError, "edge weights must be finite, got one beyond"),
+        ((2, np.empty((0, 2), int), [], [1j, 1]), TypeError, "node values must be real"),
     ],
 )
 def test_a_graph_made_by_hand_is_checked(fields, error, message):
@@ -239,7 +245,7 @@ def _one_sided():
 @pytest.mark.parametrize(
     "sample, error, message",
     [
-        (_asymmetric, ValueError, r"not symmetric: entry \(3, 4\) is 1 but \(4, 3\) is 2"),
+        (_asymmetric, ValueError, r"not symmetric: entry \(3, 4\) is 1.0 but \(4, 3\) is 2.0"),
         (_one_sided, ValueError, r"not symmetric: entry \(0, 6\) is 0.5 but \(6, 0\) is 0"),
         (lambda: -_adjacency(EDGES, np.ones(5), 7), ValueError, "negative entry"),
         (lambda: _adjacency(EDGES, np.r_[1, 1, np.nan, 1, 1], 7), ValueError, "NaN or infinite"),
@@ -291,7 +297,7 @@ def test_a_bad_networkx_graph_is_refused_naming_the_sample():
     cases.append((labelled, ValueError, "node 0 has no 'label' while other nodes have one"))
     text = nx.Graph([(0, 1)])
     nx.set_node_attributes(text, {0: "C", 1: "O"}, "label")
-    cases.append((text, TypeError, "'label' values must be numbers"))
+    cases.append((text, TypeError, "'label' values must be real numbers"))
     missing = nx.Graph([(0, 1)])
     nx.set_node_attributes(missing, {0: np.nan, 1: 1.0}, "label")
     cases.append((missing, ValueError, "node 0 has a NaN"))
@@ -304,7 +310,7 @@ def test_a_bad_networkx_graph_is_refused_naming_the_sample():
     cases.append((nx.Graph([(0, 1, {"weight": "2.5"})]), TypeError, "weight '2.5' is not a"))
     digits = nx.Graph([(0, 1)])
     nx.set_node_attributes(digits, {0: "3", 1: "4"}, "label")
-    cases.append((digits, TypeError, "'label' values must be numbers"))
+    cases.append((digits, TypeError, "'label' values must be real numbers"))
     for sample, error, message in cases:
         with pytest.raises(error, match=f"^sample 3: .*{message}"):
             check_graph(sample, index=3)
@@ -315,3 +321,30 @@ def test_other_objects_are_not_graphs():
         check_graph({}, index=1)
     with pytest.raises(TypeError, match="^graph: not a graph: str"):
         check_graph("graph.txt")
+
+
+def test_every_form_refuses_complex_values_and_names_repeated_entries_that_overflow():
+    """Found by an adversarial review: a networkx label 1j was read as 0 with only a
+    ComplexWarning (a Graph refused it); repeated sparse entries summing beyond float64
+    leaked a RuntimeWarning and were called "a NaN or infinite entry"; an asymmetry was
+    shown as "entry (0, 1) is 1 but (1, 0) is 1"."""
+    import warnings
+
+    nx = pytest.importorskip("networkx")
+    graph = nx.Graph()
+    graph.add_node(0, label=1j)
+    graph.add_node(1, label=1)
+    with pytest.raises(TypeError, match="sample 0: node 'label' values must be real numbers"):
+        check_graph(graph, index=0)
+    graph.nodes[0]["label"] = 2
+    graph.add_edge(0, 1, weight=1j)
+    with pytest.raises(TypeError, match="sample 0: edge weight 1j is not a number"):
+        check_graph(graph, index=0)
+    repeated = sp.coo_matrix(([1e308] * 4, ([0, 0, 1, 1], [1, 1, 0, 0])), shape=(2, 2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"repeated entries of \(0, 1\) .* sum beyond"):
+            check_graph(repeated)
+    close = sp.csr_matrix(np.array([[0, 1.0], [1 + 1e-9, 0]]))
+    with pytest.raises(ValueError, match=r"\(0, 1\) is 1.0 but \(1, 0\) is 1.000000001"):
+        check_graph(close)

@@ -342,6 +342,10 @@ def test_graph_without_edges_and_bad_graph_values_are_named():
         )
     with pytest.raises(ValueError, match=r"shape \(4,\)"):
         lower_star_persistence(as_graph(4, [[0, 1]]), np.zeros(5))
+    # Found by an adversarial review: an int beyond float64 was a bare OverflowError.
+    square = (4, [[0, 1], [1, 2], [2, 3], [0, 3]])
+    with pytest.raises(ValueError, match="graph: values must be finite, got one beyond float64"):
+        extended_persistence(square, [0, 1, 2, 10**400])
 
 
 def test_graphs_meshes_and_workers_mix_in_one_call():

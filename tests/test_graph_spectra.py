@@ -117,6 +117,26 @@ def test_weights_scale_the_combinatorial_laplacian_not_the_normalized_one():
     np.testing.assert_allclose(spectrum(edge, "random_walk"), [0, 2], atol=1e-12)
 
 
+def test_tiny_weights_scale_the_random_walk_vectors_without_a_warning():
+    """Found by an adversarial review: with weights near 1e-300 the D-orthonormal
+    eigenvectors are near 1e150, and the sign rule cubed them (overflow, NaN skewness,
+    RuntimeWarnings); with weights spanning float64's range the error was scipy's
+    "array must not contain infs or NaNs"."""
+    options = dict(laplacian="random_walk", normalization="none", components="all", n_jobs=1)
+    path = [[0, 1], [1, 2], [2, 3]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tiny = LaplacianEigenTransformer(eigen_index=(1, 2, 3), **options).fit_transform(
+            [Graph(4, path, [1e-300, 2e-300, 3e-300])]
+        )[0]
+    unit = LaplacianEigenTransformer(eigen_index=(1, 2, 3), **options).fit_transform(
+        [Graph(4, path, [1.0, 2.0, 3.0])]
+    )[0]
+    np.testing.assert_allclose(tiny.values, unit.values * 1e150, rtol=1e-9)
+    with pytest.raises(ValueError, match="sample 0: .* the weights span too wide a range"):
+        LaplacianEigenTransformer(**options).fit_transform([Graph(3, path[:2], [2.3e-308, 1e300])])
+
+
 @pytest.mark.parametrize("kind", ["graph", "normalized"])
 def test_operators_match_the_dense_definitions(kind):
     graph = make_graph(7, [(0, 1), (1, 2), (0, 2), (3, 4)], [1.0, 2.0, 0.5, 4.0])

@@ -108,6 +108,13 @@ def test_a_fifo_or_a_folder_in_place_of_a_tu_file_is_named_and_never_read(tmp_pa
     os.mkfifo(tmp_path / "TINY_node_attributes.txt.gz")
     with pytest.raises(ValueError, match=r"node_attributes.txt.gz' is not a regular file"):
         load_tu_dataset(tmp_path)
+    # Found by an adversarial review: a FIFO as the graph indicator, the file that
+    # names a dataset, made the folder "hold no TU dataset".
+    os.unlink(tmp_path / "TINY_node_attributes.txt.gz")
+    os.unlink(tmp_path / "TINY_graph_indicator.txt")
+    os.mkfifo(tmp_path / "TINY_graph_indicator.txt")
+    with pytest.raises(ValueError, match=r"graph_indicator.txt' is not a regular file"):
+        load_tu_dataset(tmp_path)
 
 
 def test_more_graphs_than_the_limit_are_refused_before_they_are_built(tmp_path, monkeypatch):

@@ -71,9 +71,25 @@ def tu_dataset_names(folder) -> list[str]:
     folder = os.fsdecode(os.fspath(folder))
     if not os.path.isdir(folder):
         return []
+    return sorted(n for n in _a_names(folder) if _find(folder, n, "graph_indicator") is not None)
+
+
+def _a_names(folder: str) -> set[str]:
+    """The names ``DS`` of the ``DS_A.txt`` files in ``folder`` (plain or compressed)."""
     pattern = re.compile(r"(.+)_A\.txt(" + "|".join(map(re.escape, COMPRESSIONS)) + r")?")
-    names = {m.group(1) for f in os.listdir(folder) if (m := pattern.fullmatch(f))}
-    return sorted(n for n in names if _find(folder, n, "graph_indicator") is not None)
+    return {m.group(1) for f in os.listdir(folder) if (m := pattern.fullmatch(f))}
+
+
+def _irregular(folder: str, names) -> str | None:
+    """The first file of a dataset of ``names`` that exists and is not a regular file
+    (a FIFO, a folder), or None."""
+    for name in sorted(names):
+        for part in ("A", "graph_indicator", "graph_labels"):
+            for ending in _ENDINGS:
+                path = os.path.join(folder, f"{name}_{part}.txt{ending}")
+                if os.path.lexists(path) and not os.path.isfile(path):
+                    return path
+    return None
 
 
 def _content(path: str, place: str) -> bytes:
@@ -372,6 +388,9 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
         raise ValueError(f"TU dataset folder {folder!r} does not exist or is not a folder")
     if name is None:
         names = tu_dataset_names(folder)
+        irregular = None if names else _irregular(folder, _a_names(folder))
+        if irregular is not None:
+            raise ValueError(f"TU file {irregular!r} is not a regular file")
         if len(names) != 1:
             found = f"datasets {', '.join(names)}; pass name=" if names else "no TU dataset"
             raise ValueError(

@@ -24,6 +24,7 @@ isolated node is a component of one node. Which components the eigen stage keeps
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from numbers import Integral, Number
 
@@ -32,7 +33,7 @@ import scipy.sparse as sp
 
 from ..mesh.validation import where
 
-__all__ = ["Graph", "check_graph", "holds_text", "is_graph"]
+__all__ = ["Graph", "check_graph", "holds_text", "is_graph", "real_numbers"]
 
 # Relative difference tolerated between a[i, j] and a[j, i] of a symmetric adjacency.
 _SYMMETRY_RTOL = 1e-10
@@ -106,16 +107,27 @@ def _numbers_only(values, what: str, place: str) -> None:
         raise TypeError(f"{place}: {what} must be numbers, not text")
 
 
+def real_numbers(values, what: str, place: str) -> np.ndarray:
+    """``values`` as float64: a ``TypeError`` naming ``place`` and ``what`` for text,
+    complex numbers (numpy would drop their imaginary parts with only a warning) or
+    other objects; a ``ValueError`` for an integer beyond float64's range."""
+    _numbers_only(values, what, place)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", np.exceptions.ComplexWarning)
+            if np.iscomplexobj(values):
+                raise np.exceptions.ComplexWarning
+            return np.asarray(values, dtype=np.float64)
+    except OverflowError:  # an int beyond float64
+        raise ValueError(f"{place}: {what} must be finite, got one beyond float64") from None
+    except (ValueError, TypeError, np.exceptions.ComplexWarning):
+        raise TypeError(f"{place}: {what} must be real numbers") from None
+
+
 def _check_node_values(values, n_nodes: int, place: str):
     if values is None:
         return None
-    _numbers_only(values, "node values", place)
-    try:
-        values = np.asarray(values, dtype=np.float64)
-    except OverflowError:  # an int beyond float64
-        raise ValueError(f"{place}: node values must be finite, got one beyond float64") from None
-    except (ValueError, TypeError):
-        raise TypeError(f"{place}: node values must be numbers") from None
+    values = real_numbers(values, "node values", place)
     if values.ndim == 1:
         values = values[:, None]
     if values.ndim != 2 or len(values) != n_nodes:
@@ -160,8 +172,7 @@ class Graph:
         place = "graph"
         n_nodes = _n_nodes(self.n_nodes, place)
         edges = _edge_array(self.edges, place)
-        _numbers_only(self.weights, "edge weights", place)
-        weights = np.asarray(self.weights, dtype=np.float64).reshape(-1)
+        weights = real_numbers(self.weights, "edge weights", place).reshape(-1)
         if len(weights) != len(edges):
             raise ValueError(f"{place}: {len(edges)} edges but {len(weights)} weights")
         i, j = edges[:, 0], edges[:, 1]
@@ -246,6 +257,8 @@ def _weight(value, place: str) -> float:
     if isinstance(value, (str, bytes)):
         raise TypeError(f"{place}: edge weight {value!r} is not a number")
     try:
+        if np.iscomplexobj(value):  # float() refuses complex, numpy's drops the imaginary
+            raise TypeError
         weight = float(value)
     except OverflowError:  # an int beyond float64
         weight = np.inf
@@ -268,7 +281,7 @@ def _networkx_node_values(data: list[dict], place: str):
             raise ValueError(f"{place}: node {node} has no {key!r} while other nodes have one")
         try:
             raw = np.array([d[key] for d in data])
-            if holds_text(raw):  # "3" would be read as 3
+            if holds_text(raw) or np.iscomplexobj(raw):  # "3" would be read as 3
                 raise TypeError
             column = raw.astype(np.float64)
         except OverflowError:  # an int beyond float64
@@ -277,7 +290,7 @@ def _networkx_node_values(data: list[dict], place: str):
             ) from None
         except (ValueError, TypeError):
             raise TypeError(
-                f"{place}: node {key!r} values must be numbers, as many on every node "
+                f"{place}: node {key!r} values must be real numbers, as many on every node "
                 "(encode text labels first)"
             ) from None
         columns.append(column.reshape(len(data), -1))
@@ -330,8 +343,8 @@ def _asymmetry(rows, cols, values, n: int, place: str) -> None:
         a = up_values[up_keys == missing][0] if np.isin(missing, up_keys) else 0.0
         b = low_values[low_keys == missing][0] if np.isin(missing, low_keys) else 0.0
     raise ValueError(
-        f"{place}: the adjacency matrix is not symmetric: entry ({i}, {j}) is {a:g} "
-        f"but ({j}, {i}) is {b:g}"
+        f"{place}: the adjacency matrix is not symmetric: entry ({i}, {j}) is {float(a)!r} "
+        f"but ({j}, {i}) is {float(b)!r}"
     )
 
 
@@ -344,10 +357,17 @@ def _from_sparse(matrix, place: str) -> Graph:
     # A float64 copy (the caller's matrix is left alone) before repeated entries are
     # summed: in uint8, 200 + 100 would wrap to 44.
     coo = sp.coo_array(matrix, dtype=np.float64, copy=True)
-    coo.sum_duplicates()  # also sorts the entries by row, then column
+    if not np.isfinite(coo.data).all():
+        raise ValueError(f"{place}: the adjacency matrix has a NaN or infinite entry")
+    with np.errstate(over="ignore", invalid="ignore"):
+        coo.sum_duplicates()  # also sorts the entries by row, then column
     values = coo.data
     if not np.isfinite(values).all():
-        raise ValueError(f"{place}: the adjacency matrix has a NaN or infinite entry")
+        k = int(np.flatnonzero(~np.isfinite(values))[0])
+        raise ValueError(
+            f"{place}: the repeated entries of ({int(coo.row[k])}, {int(coo.col[k])}) of "
+            "the adjacency matrix sum beyond float64's range"
+        )
     if (values < 0).any():
         k = int(np.flatnonzero(values < 0)[0])
         raise ValueError(

@@ -146,6 +146,8 @@ def check_values(values, n_vertices: int, place: str = "values") -> np.ndarray:
     """Vertex values as float64, shape ``(n_vertices,)`` or ``(n_vertices, k)``, finite."""
     try:
         values = np.asarray(values, dtype=np.float64)
+    except OverflowError:  # a Python int beyond float64
+        raise ValueError(f"{place}: values must be finite, got one beyond float64") from None
     except (ValueError, TypeError) as exc:
         raise ValueError(f"{place}: values must be a numeric array: {exc}") from exc
     if values.ndim not in (1, 2) or values.shape[0] != n_vertices:

@@ -396,7 +396,7 @@ def _node_values(values, n_nodes: int) -> np.ndarray:
         )
     try:
         array = np.ascontiguousarray(values, dtype=np.float64)
-    except (ValueError, TypeError):
+    except (ValueError, TypeError, OverflowError):
         return check_values(values, n_nodes, "graph")  # raises, naming the problem
     if array.shape != (n_nodes,):
         raise ValueError(f"graph: values must have shape ({n_nodes},), got {array.shape}")

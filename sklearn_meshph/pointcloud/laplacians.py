@@ -57,7 +57,7 @@ def point_cloud_laplacian(
 
     Parameters
     ----------
-    points : ndarray of shape (n, 3)
+    points : ndarray of shape (n, 3) or trimesh.PointCloud
         Distinct, finite points sampling a surface.
     n_neighbors : int, default=30
         Neighbours per point that its local triangulation comes from. Its tangent plane
@@ -123,6 +123,8 @@ def point_cloud_laplacian(
     >>> round(float(M.sum()), 2)  # the area of the unit sphere, 4 pi = 12.57
     12.51
     """
+    if not isinstance(points, np.ndarray) and hasattr(points, "vertices"):
+        points = points.vertices  # a trimesh.PointCloud, as the estimators take it
     points = check_vertices(points, "points")
     if len(points) < MIN_POINTS:
         raise ValueError(

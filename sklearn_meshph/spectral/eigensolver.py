@@ -114,7 +114,12 @@ def fix_signs(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
     index among entries within 1e-6 of that largest value (symmetric shapes have exact
     ties, which rounding would otherwise break one way or the other).
     """
-    cubes = vectors * vectors * vectors  # not ** 3: pow() is ten times slower
+    # Each column scaled by a power of two to at most 1 in size first: exact, so the
+    # decisions are those of the column itself, and the cubes of an eigenvector of
+    # entries near 1e150 (a graph of weights near 1e-300, its mass D) do not overflow.
+    exponents = np.frexp(np.abs(vectors).max(axis=0, initial=0.0))[1]
+    unit = np.ldexp(vectors, -exponents[None, :])
+    cubes = unit * unit * unit  # not ** 3: pow() is ten times slower
     skew = mass @ cubes
     scale = mass @ np.abs(cubes)
     flip = skew < 0
@@ -141,10 +146,20 @@ def dense_eigenpairs(
             f"its limit of {DENSE_LIMIT} rows: ask for fewer eigenpairs than rows "
             "(n_eigenpairs), with solver='auto'"
         )
-    inverse_root = 1.0 / np.sqrt(mass)
     A = L.toarray()
-    A *= inverse_root[:, None]
-    A *= inverse_root[None, :]
+    # Masses spanning more than float64's range underflow to 0 once brought to a unit
+    # trace, and their inverses overflow: refused below, not warned about.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        inverse_root = 1.0 / np.sqrt(mass)
+        A *= inverse_root[:, None]
+        A *= inverse_root[None, :]
+    if not np.isfinite(A).all():
+        raise ValueError(
+            "the operator scaled by the masses' inverse square roots leaves float64's range "
+            f"(masses, scaled to sum to about 1, from {mass.min():.3g} to "
+            f"{mass.max():.3g}; stiffness up to "
+            f"{abs(L).max():.3g}): the weights span too wide a range; scale the small ones up"
+        )
     if n_eigenpairs < n:
         values, vectors = scipy.linalg.eigh(
             A, subset_by_index=[0, n_eigenpairs - 1], driver="evr", overwrite_a=True
