@@ -23,7 +23,11 @@ from sklearn_meshph import (
     sample_point_cloud,
 )
 from sklearn_meshph.mesh import unit_box
-from sklearn_meshph.pointcloud.graph import neighbourhood_components, sparse_outliers
+from sklearn_meshph.pointcloud.graph import (
+    knn_graph,
+    neighbourhood_components,
+    sparse_outliers,
+)
 
 MESHES = make_shapes(n_per_class=1, random_state=0).data
 N = 1500
@@ -179,8 +183,9 @@ def test_point_cloud_laplacian_takes_a_point_cloud_object():
 
 def test_functions_given_too_many_far_points_refuse_them_naming_the_problem():
     cloud = np.vstack([sphere_points(), np.random.default_rng(2).normal(size=(200, 3)) * 1e100])
-    with pytest.raises(ValueError, match="points: 1500 of the point cloud's 1700 points lie in"):
-        point_cloud_laplacian(cloud)
+    for function in (point_cloud_laplacian, knn_graph):
+        with pytest.raises(ValueError, match="points: 1500 of the point cloud's 1700 points"):
+            function(cloud)
     with pytest.raises(ValueError, match="sample 0: 1500 of the point cloud's 1700 points"):
         LowerStarPersistence().fit_transform([(cloud, np.zeros(len(cloud)))])
 

@@ -169,16 +169,26 @@ def unique_edges(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
 def knn_graph(points: np.ndarray, n_neighbors: int = GRAPH_NEIGHBORS) -> np.ndarray:
     """Edges ``(m, 2)`` (``a < b``, sorted, each once) of the symmetric kNN graph.
 
-    Computed in the unit box and in :func:`canonical_order`, then renumbered: the same
-    graph at any scale float64 holds, and a permuted cloud gives the permuted graph.
+    Computed in :func:`cloud_unit_box` and in :func:`canonical_order`, then renumbered:
+    the same graph at any scale float64 holds, far points or not, and a permuted cloud
+    gives the permuted graph. Points that box leaves unresolved are refused.
     """
+    return _knn_graph(points, n_neighbors, refuse=True)
+
+
+def _knn_graph(points: np.ndarray, n_neighbors: int, *, refuse: bool) -> np.ndarray:
+    """:func:`knn_graph`; without ``refuse``, in the plain unit box: the eigen stage's
+    points, already cleaned (their far points dropped, unresolved ones reported)."""
     points = np.asarray(points, dtype=np.float64)
     n = len(points)
     if n < 2:
         return np.empty((0, 2), dtype=np.int64)
     order = canonical_order(points)
-    unit, _, unresolved = cloud_unit_box(points[order])
-    refuse_unresolved(unresolved, "points")
+    if refuse:
+        unit, _, unresolved = cloud_unit_box(points[order])
+        refuse_unresolved(unresolved, "points")
+    else:
+        unit = unit_box(points[order])[0]
     _, indices = nearest(unit, n_neighbors)
     return unique_edges(np.repeat(order, indices.shape[1]), order[indices.ravel()], n)
 

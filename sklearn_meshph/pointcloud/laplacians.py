@@ -31,9 +31,9 @@ from ..mesh.validation import check_vertices
 from ._triangulation import LOCAL_NEIGHBORS, tangent_fans
 from .graph import (
     GRAPH_NEIGHBORS,
+    _knn_graph,
     cloud_unit_box,
     edge_adjacency,
-    knn_graph,
     refuse_coincident,
     refuse_unresolved,
 )
@@ -301,7 +301,7 @@ def _cotangent_csr(n, triangles, a, b, weights):
 
 
 def _graph(points):
-    adjacency = edge_adjacency(knn_graph(points, GRAPH_NEIGHBORS), len(points))
+    adjacency = edge_adjacency(_knn_graph(points, GRAPH_NEIGHBORS, refuse=False), len(points))
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     return (sp.diags(degree) - adjacency).tocsr(), sp.identity(len(points), format="dia")
 
