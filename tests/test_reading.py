@@ -490,6 +490,11 @@ def test_a_ply_declaring_too_many_rows_is_refused_before_it_is_read(tmp_path, co
     message = rf"declares 178869589 vertex rows, more than MAX_PLY_ROWS \({MAX_PLY_ROWS}\)"
     _, peak = traced_peak(lambda: read_sample_file(path, "sample 0"), "sample 0: .*" + message)
     assert peak < 4 * 1024**2
+    # Comments pushing the counts beyond the header's first 64 KiB do not hide them.
+    long_header = header.replace(b"element", b"comment x\n" * 8000 + b"element", 1)
+    path.write_bytes(compress(long_header + bytes(12 * 1024**2)))
+    with pytest.raises(ValueError, match="no end_header in its first 65536 bytes"):
+        read_sample_file(path, "sample 0")
 
 
 def test_text_point_clouds_are_bounded_by_points_and_columns(tmp_path, monkeypatch):
@@ -695,7 +700,9 @@ def test_a_text_mesh_with_a_line_beyond_the_limit_is_refused_before_parsing(tmp_
         content = b"# " + b" " * 30_000_000 + b"\n" + mesh.export(file_type="obj").encode()
     else:
         ply = mesh.export(file_type="ply", encoding="ascii")
-        content = ply.replace(b"end_header\n", b"comment " + b" " * 30_000_000 + b"\nend_header\n")
+        # In the body (in the header, the header's own 64 KiB limit refuses it first).
+        head, body = ply.split(b"end_header\n", 1)
+        content = head + b"end_header\n" + body.replace(b"\n", b" " * 30_000_000 + b"\n", 1)
     path = tmp_path / f"long.{kind}.gz"
     path.write_bytes(gzip.compress(content))
     refused = r"has a line longer than \d+ bytes \(MAX_TEXT_LINE\)"

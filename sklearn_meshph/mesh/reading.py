@@ -186,7 +186,13 @@ def _check_ply_header(path: str, compression, place: str) -> None:
                 head += chunk
     end = head.find(b"end_header")
     if end < 0:
-        return  # no header within reach: trimesh refuses it
+        if len(head) < _PLY_HEADER:
+            return  # no header at all: trimesh refuses the file
+        # Comments could push the counts past what is read: trimesh would read them.
+        raise ValueError(
+            f"{place}: mesh file {path!r} is not a valid .ply mesh: no end_header in its "
+            f"first {_PLY_HEADER} bytes"
+        )
     for line in head[:end].splitlines():
         words = line.split()
         if len(words) == 3 and words[0] == b"element" and words[2].isdigit():
