@@ -85,6 +85,7 @@ def test_real_mesh_matches_gudhi(sumner_dir):
         (np.zeros(41), r"shape \(42,\) or \(42, k\)"),
         (np.zeros((42, 2)), "use LowerStarPersistence"),
         (np.r_[np.zeros(41), np.inf], "NaN or inf"),
+        (np.zeros(42, dtype=complex), "must be real numbers, got complex ones"),
     ],
 )
 def test_bad_values_are_refused(values, message):

@@ -62,6 +62,11 @@ def test_essential_policies_and_min_persistence():
     [
         (np.zeros(5), r"sample 1: values must have shape \(42,\)"),
         (np.full(42, np.nan), "sample 1: values contain NaN"),
+        # Found probing stop 52's fixes: complex values lost their imaginary parts with
+        # only a ComplexWarning (a graph's were refused); an int beyond float64 was a
+        # bare OverflowError.
+        (np.zeros(42) + 1j, "sample 1: values must be real numbers, got complex ones"),
+        ([0] * 41 + [10**400], "sample 1: values must be finite, got one beyond float64"),
     ],
 )
 def test_bad_values_name_the_sample(values, message):

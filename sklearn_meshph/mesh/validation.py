@@ -143,7 +143,11 @@ def _in_range(indices: np.ndarray, n_vertices: int, what: str, place: str) -> np
 
 
 def check_values(values, n_vertices: int, place: str = "values") -> np.ndarray:
-    """Vertex values as float64, shape ``(n_vertices,)`` or ``(n_vertices, k)``, finite."""
+    """Vertex values as float64, shape ``(n_vertices,)`` or ``(n_vertices, k)``, finite
+    and real (complex ones are refused: NumPy would drop the imaginary parts with only a
+    warning)."""
+    if np.iscomplexobj(values):
+        raise ValueError(f"{place}: values must be real numbers, got complex ones")
     try:
         values = np.asarray(values, dtype=np.float64)
     except OverflowError:  # a Python int beyond float64
