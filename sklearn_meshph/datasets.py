@@ -91,7 +91,9 @@ def load_mesh_folder(
     Sub-folders whose names start with ``_`` or ``.`` are ignored, and so are hidden
     files (names starting with ``.``: macOS's ``._`` companions, editors' backups) and
     files whose names do not end with one of ``extensions``. A sub-folder without such files is not
-    a class.
+    a class. An entry named like a sample that is not a regular file (a FIFO, a folder,
+    a broken link) is a sample that cannot be read: refused, or skipped and listed with
+    ``on_error="skip"``, never left out without a word.
 
     Point clouds are ``.xyz`` and ``.pts`` text files and files of a mesh format without
     faces (a PLY of vertices); they load as ``(n, 3)`` float64 arrays, which every
@@ -173,7 +175,10 @@ def load_mesh_folder(
         files = sorted(
             f
             for f in folder.iterdir()
-            if f.is_file() and not f.name.startswith(".") and f.name.lower().endswith(endings)
+            # Not only regular files: a FIFO, a folder or a broken link under a mesh's
+            # name is a sample that cannot be read, refused or skipped by name, not
+            # silently left out of its class.
+            if not f.name.startswith(".") and f.name.lower().endswith(endings)
         )
         if not files:
             continue
