@@ -3,6 +3,7 @@ the brute-force answers of the fitted pipeline, bit for bit, ties by lowest inde
 
 from __future__ import annotations
 
+import os
 import pickle
 
 import numpy as np
@@ -212,6 +213,12 @@ def test_distance_matrix_writes_the_brute_force_matrix_by_blocks(tmp_path):
     np.testing.assert_array_equal(rows, brute.transform(train[:6]))
     with pytest.raises(ValueError, match="dtype must be 'float32' or 'float64'"):
         index.distance_matrix(dtype="float16")
+    # Found probing stop 52's surfaces: a FIFO at the path failed as "File or stream is
+    # not seekable", naming nothing; /proc/version as an I/O error.
+    os.mkfifo(tmp_path / "fifo.npy")
+    for path in (tmp_path / "fifo.npy", tmp_path, "/dev/null"):
+        with pytest.raises(ValueError, match="exists and is not a regular file"):
+            index.distance_matrix(path=path)
 
 
 def test_classifier_predicts_as_kneighbors_classifier_on_the_brute_force_matrix():

@@ -3,6 +3,7 @@ pruned by lower bounds, in bounded memory; and 1-NN classification on top."""
 
 from __future__ import annotations
 
+import os
 from numbers import Integral
 
 import numpy as np
@@ -348,7 +349,8 @@ class _ShapeIndex(BaseEstimator):
             computed once (as ``distance.fit_transform`` of the fitted samples returns
             it, when the scales were learned on all of them).
         path : str, path or None, default=None
-            Where to write the matrix (an ``.npy`` file, overwritten); ``None``: in memory.
+            Where to write the matrix (an ``.npy`` file, overwritten; anything else at
+            that path, such as a FIFO or a device, is refused); ``None``: in memory.
         dtype : {"float32", "float64"}, default="float32"
 
         Returns
@@ -358,6 +360,9 @@ class _ShapeIndex(BaseEstimator):
         check_is_fitted(self, "rows_")
         if not Options(("float32", "float64"))(dtype):
             raise ValueError(f"dtype must be 'float32' or 'float64', got {dtype!r}")
+        if path is not None and os.path.lexists(path) and not os.path.isfile(path):
+            # A FIFO would block or fail as "not seekable", a device be written to.
+            raise ValueError(f"path {os.fspath(path)!r} exists and is not a regular file")
         query = self.rows_ if X is None else self._represent(X)
         n_rows, n = len(next(iter(query.values()))), self.n_samples_fit_
         shape = (n_rows, n)
