@@ -86,6 +86,7 @@ def test_real_mesh_matches_gudhi(sumner_dir):
         (np.zeros((42, 2)), "use LowerStarPersistence"),
         (np.r_[np.zeros(41), np.inf], "NaN or inf"),
         (np.zeros(42, dtype=complex), "must be real numbers, got complex ones"),
+        ([[0.0]] * 41 + [[0.0, 1.0]], "values must be a numeric array"),  # ragged
     ],
 )
 def test_bad_values_are_refused(values, message):

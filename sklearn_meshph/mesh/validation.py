@@ -146,14 +146,16 @@ def check_values(values, n_vertices: int, place: str = "values") -> np.ndarray:
     """Vertex values as float64, shape ``(n_vertices,)`` or ``(n_vertices, k)``, finite
     and real (complex ones are refused: NumPy would drop the imaginary parts with only a
     warning)."""
-    if np.iscomplexobj(values):
-        raise ValueError(f"{place}: values must be real numbers, got complex ones")
     try:
-        values = np.asarray(values, dtype=np.float64)
+        is_complex = np.iscomplexobj(values)  # converts a sequence: a ragged one raises
+        if not is_complex:
+            values = np.asarray(values, dtype=np.float64)
     except OverflowError:  # a Python int beyond float64
         raise ValueError(f"{place}: values must be finite, got one beyond float64") from None
     except (ValueError, TypeError) as exc:
         raise ValueError(f"{place}: values must be a numeric array: {exc}") from exc
+    if is_complex:
+        raise ValueError(f"{place}: values must be real numbers, got complex ones")
     if values.ndim not in (1, 2) or values.shape[0] != n_vertices:
         raise ValueError(
             f"{place}: values must have shape ({n_vertices},) or ({n_vertices}, k) to match "
