@@ -346,6 +346,8 @@ def test_graph_without_edges_and_bad_graph_values_are_named():
     square = (4, [[0, 1], [1, 2], [2, 3], [0, 3]])
     with pytest.raises(ValueError, match="graph: values must be finite, got one beyond float64"):
         extended_persistence(square, [0, 1, 2, 10**400])
+    with pytest.raises(ValueError, match="graph: values must be a numeric array"):
+        extended_persistence(square, [[0.0], [1.0, 2.0], 3.0, 4.0])  # ragged
 
 
 def test_graphs_meshes_and_workers_mix_in_one_call():

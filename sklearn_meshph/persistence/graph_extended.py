@@ -386,7 +386,11 @@ def _node_values(values, n_nodes: int) -> np.ndarray:
     """``values`` as a contiguous finite float64 ``(n_nodes,)`` array, or the error of
     :func:`~sklearn_meshph.mesh.validation.check_values` (with less overhead: graphs are
     small)."""
-    if np.iscomplexobj(values):  # NumPy would drop the imaginary part with a warning
+    try:
+        is_complex = np.iscomplexobj(values)  # converts a sequence: a ragged one raises
+    except ValueError:
+        return check_values(values, n_nodes, "graph")  # raises, naming the problem
+    if is_complex:  # NumPy would drop the imaginary part with a warning
         raise TypeError("graph: values must be real numbers, got complex ones")
     if values is None or holds_text(values, none=True):
         # None became one NaN, text such as "3" a number, None inside a list a NaN (a
