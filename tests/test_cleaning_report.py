@@ -149,3 +149,14 @@ def test_largest_component_tiny_warns_then_fails_with_a_clear_error(tmp_path):
     with pytest.warns(MeshCleaningWarning, match=lost):
         with pytest.raises(ValueError, match=r"^sample 0: eigen_index 3 needs at least 4 vertices"):
             LaplacianEigenTransformer(eigen_index=(1, 2, 3)).fit_transform([str(path)])
+
+
+@pytest.mark.parametrize("far", [1e9, 1e300])
+def test_a_far_vertex_that_collapses_the_mesh_is_named(far):
+    """Found probing the default on real data (stop 52): a mesh with one vertex at 1e300
+    was refused as "every face is degenerate", which named neither the vertex nor why."""
+    sphere = trimesh.creation.icosphere(3)
+    vertices = np.array(sphere.vertices)
+    vertices[5] = far
+    with pytest.raises(ValueError, match=r"sample 0: every face is degenerate .*vertex 5 first"):
+        LaplacianEigenTransformer().fit_transform([(vertices, sphere.faces)])

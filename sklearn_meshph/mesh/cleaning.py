@@ -258,6 +258,25 @@ def clean_mesh(
     return clean_checked(vertices, faces, components=components, index=index, weld=weld)
 
 
+def _far_vertices_hint(vertices: np.ndarray) -> str:
+    """Why every face may be degenerate: a few vertices (at most a tenth) outside
+    Tukey's fences (three interquartile ranges beyond the quartiles) and over 1e6 times
+    farther out than the others extend, at whose scale the others collapse (welding
+    merges them). An empty string otherwise."""
+    low, high = np.percentile(vertices, [25, 75], axis=0)
+    reach = 3.0 * (high - low)
+    outside = ~np.all((vertices >= low - reach) & (vertices <= high + reach), axis=1)
+    if not outside.any() or np.count_nonzero(outside) > 0.1 * len(vertices):
+        return ""
+    if not np.ptp(vertices, axis=0).max() > 1e6 * np.ptp(vertices[~outside], axis=0).max():
+        return ""
+    return (
+        f": {np.count_nonzero(outside)} vertices (vertex {int(np.flatnonzero(outside)[0])} "
+        "first) lie over 1e6 times farther out than the others extend, and at the scale "
+        "of the whole mesh the others collapse; remove them"
+    )
+
+
 def clean_checked(
     vertices, faces, *, components: str, index: int | None, weld: bool = True
 ) -> CleanMesh:
@@ -279,7 +298,10 @@ def clean_checked(
     n_degenerate = len(faces) - int(np.count_nonzero(keep))
     faces = faces[keep]
     if len(faces) == 0:
-        raise ValueError(f"{place}: every face is degenerate (zero area); nothing is left")
+        raise ValueError(
+            f"{place}: every face is degenerate (zero area); nothing is left"
+            + _far_vertices_hint(vertices)
+        )
     n_faces = len(faces)
     faces = faces[first_of_duplicate_faces(faces)]
     n_repeated = n_faces - len(faces)
