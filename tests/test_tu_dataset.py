@@ -79,6 +79,12 @@ def test_the_dataset_is_named_when_a_folder_holds_several(tmp_path):
         load_tu_dataset(tmp_path)
     assert load_tu_dataset(tmp_path, name="OTHER")[1].tolist() == [5, 6, 7]
     _check_tiny(*load_tu_dataset(tmp_path, name="TINY"))
+    # Found probing stop 52's surfaces: a name with a path in it read the files of a
+    # dataset outside the folder.
+    (tmp_path / "inner").mkdir()
+    for name in ("../TINY", "inner/../TINY", "..", "", 5):
+        with pytest.raises(ValueError, match="name must be the name of a TU dataset in"):
+            load_tu_dataset(tmp_path / "inner", name=name)
 
 
 def test_other_folders_are_not_tu_datasets(tmp_path):

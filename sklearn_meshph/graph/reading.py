@@ -361,7 +361,8 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
         there), optionally
         ``DS_node_labels.txt`` and ``DS_node_attributes.txt``.
     name : str, optional
-        The dataset's name ``DS``; by default the one dataset of the folder.
+        The dataset's name ``DS``; by default the one dataset of the folder. A name,
+        not a path: files outside ``folder`` are never read.
 
     Returns
     -------
@@ -398,6 +399,12 @@ def load_tu_dataset(folder, name: str | None = None) -> tuple[list[Graph], np.nd
                 "DS_A.txt, DS_graph_indicator.txt and DS_graph_labels.txt, plain or .gz)"
             )
         name = names[0]
+    elif not isinstance(name, str) or name in ("", ".", "..") or os.path.basename(name) != name:
+        # A name is a prefix of files in the folder, not a path to files elsewhere.
+        raise ValueError(
+            f"name must be the name of a TU dataset in {folder!r} (the DS of its DS_A.txt), "
+            f"not a path; got {name!r}"
+        )
     place = f"TU dataset {name}"
     paths = {}
     for part in ("A", "graph_indicator", "graph_labels"):
