@@ -11,7 +11,14 @@
 - :mod:`.graph`: compiled union-find, connected components and the edge adjacency.
 """
 
-from ._geometry import DEGENERATE_SINE, smallest_angle_sines, triangle, unit_box, unit_box_mass
+from ._geometry import (
+    DEGENERATE_SINE,
+    smallest_angle_sines,
+    triangle,
+    unit_box,
+    unit_box_mass,
+    within_tukey_fences,
+)
 from .cleaning import CleaningReport, CleanMesh, MeshCleaningWarning, clean_mesh
 from .scalar_field import ScalarField
 from .validation import check_mesh
@@ -29,5 +36,6 @@ __all__ = [
     "triangle",
     "unit_box",
     "unit_box_mass",
+    "within_tukey_fences",
     "weld_vertices",
 ]

@@ -14,6 +14,7 @@ __all__ = [
     "triangle",
     "unit_box",
     "unit_box_mass",
+    "within_tukey_fences",
 ]
 
 
@@ -34,6 +35,14 @@ def unit_box(vertices: np.ndarray, box: np.ndarray | None = None) -> tuple[np.nd
         return vertices, 1.0
     with np.errstate(over="ignore"):
         return (vertices / 2 - center) / extent, 2.0 * extent
+
+
+def within_tukey_fences(points: np.ndarray) -> np.ndarray:
+    """The mask of the points within Tukey's fences: three interquartile ranges beyond
+    the quartiles, per coordinate (a few far points barely move the quartiles)."""
+    low, high = np.percentile(points, [25, 75], axis=0)
+    reach = 3.0 * (high - low)
+    return np.all((points >= low - reach) & (points <= high + reach), axis=1)
 
 
 def unit_box_mass(mass: np.ndarray, scale: float, place: str) -> np.ndarray:

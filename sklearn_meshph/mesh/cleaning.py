@@ -14,6 +14,7 @@ from ._geometry import (
     face_double_areas,
     first_of_duplicate_faces,
     nondegenerate_faces,
+    within_tukey_fences,
 )
 from .graph import connected_components
 from .validation import check_mesh, where
@@ -263,9 +264,7 @@ def _far_vertices_hint(vertices: np.ndarray) -> str:
     Tukey's fences (three interquartile ranges beyond the quartiles) and over 1e6 times
     farther out than the others extend, at whose scale the others collapse (welding
     merges them). An empty string otherwise."""
-    low, high = np.percentile(vertices, [25, 75], axis=0)
-    reach = 3.0 * (high - low)
-    outside = ~np.all((vertices >= low - reach) & (vertices <= high + reach), axis=1)
+    outside = ~within_tukey_fences(vertices)
     if not outside.any() or np.count_nonzero(outside) > 0.1 * len(vertices):
         return ""
     if not np.ptp(vertices, axis=0).max() > 1e6 * np.ptp(vertices[~outside], axis=0).max():

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh import unit_box
+from ..mesh import unit_box, within_tukey_fences
 from ..mesh.graph import connected_components
 from ._triangulation import nearest, tangent_fans
 from .validation import MIN_POINTS
@@ -64,9 +64,7 @@ def within_fences(points: np.ndarray) -> np.ndarray:
 
 
 def _inside_fences(points: np.ndarray) -> np.ndarray:
-    low, high = np.percentile(points, [25, 75], axis=0)
-    reach = 3.0 * (high - low)
-    inside = np.all((points >= low - reach) & (points <= high + reach), axis=1)
+    inside = within_tukey_fences(points)
     return inside if np.count_nonzero(inside) >= MIN_POINTS else np.ones(len(points), bool)
 
 
