@@ -3,7 +3,7 @@ would give the clouds (issue 27).
 
     python benchmarks/cloud_sheets.py buried                 # every Sumner mesh, ~7 min
     python benchmarks/cloud_sheets.py operator [--sizes 3000 10000] [--shapes all]
-    python benchmarks/cloud_sheets.py accuracy [--points 3000]
+    python benchmarks/cloud_sheets.py accuracy [--points 3000] [--collection sumner]
     python benchmarks/cloud_sheets.py pairs [--points 3000] [--shapes ...]
 
 ``buried``: the share of each closed Sumner mesh's surface that lies inside the volume
@@ -23,8 +23,9 @@ cotangent operator as the reference) for ours and the oracle, and the share of t
 neighbours kept by our sheet tests that the oracle cuts (``cat-01`` and ``lion-01``, or
 ``--shapes all``: that benchmark's 13 shapes and the sphere); the oracle's eigenpairs are
 those of its piece of largest mass; ``accuracy`` the default's
-leave-one-out 1-NN on the 60 Sumner clouds (``sample_point_cloud``, seed = the mesh's
-index, as ``learning_quality.py``), each of its parts alone, with our operator and
+leave-one-out 1-NN on the clouds of a collection (``--collection``: the 60 Sumner
+meshes by default; ``sample_point_cloud``, seed = the mesh's index, as
+``learning_quality.py``), each of its parts alone, with our operator and
 with the oracle's. ``pairs``: can a cloud tell the neighbours the oracle cuts? For each
 pair of a point and a neighbour its sheet tests keep, eight things a cloud sees of it
 (``FEATURES``: distances, normals, heights, the quadric's residual and normal, whether
@@ -266,7 +267,7 @@ def run_operator(args):
 
 
 def run_accuracy(args):
-    meshes, y, _ = collection("sumner", 2)
+    meshes, y, _ = collection(args.collection, 2)
     pipeline = make_mesh_distance(n_jobs=1)
     eigen = pipeline.named_steps["eigen"]
     fields = {"ours": [], "sheet oracle": []}
@@ -282,8 +283,8 @@ def run_accuracy(args):
             with oracle_neighbours(oracle, points, cut):
                 fields["sheet oracle"].append(eigen.fit_transform([points])[0])
     print(
-        f"Sumner, {args.points} points ({time.perf_counter() - start:.0f} s); the oracle "
-        f"cut {np.mean(cut):.3f} of the neighbours kept, {np.max(cut):.3f} at most"
+        f"{args.collection}, {args.points} points ({time.perf_counter() - start:.0f} s); "
+        f"the oracle cut {np.mean(cut):.3f} of the neighbours kept, {np.max(cut):.3f} at most"
     )
     print("| operator | ord1 | ext0 | Shape-DNA | default |")
     print("|---|---|---|---|---|")
@@ -305,6 +306,7 @@ def main():
         "--shapes", nargs="+", help="paths under the data folder, or all: bench_cloud_operator's"
     )
     parser.add_argument("--points", type=int, default=3000)
+    parser.add_argument("--collection", default="sumner", help="for accuracy: a data folder")
     args = parser.parse_args()
     run = {"buried": run_buried, "operator": run_operator, "accuracy": run_accuracy}
     run.get(args.what, run_pairs)(args)
