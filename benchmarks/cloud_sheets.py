@@ -19,7 +19,8 @@ neighbours on another sheet of the mesh left out: those whose distance along the
 mesh's edges (between the mesh vertices nearest to the two points) exceeds twice their
 distance in space plus two median edge lengths (a paw on the flank, a leg through it).
 ``operator`` prints the rows of ``bench_cloud_operator.py`` (uniform clouds, the mesh's
-cotangent operator as the reference) for ours and the oracle, and the share of the
+cotangent operator as the reference) for ours, the oracle and a control (as many of
+the neighbours cut as the oracle cuts, drawn at random), and the share of the
 neighbours kept by our sheet tests that the oracle cuts (``cat-01`` and ``lion-01``, or
 ``--shapes all``: that benchmark's 13 shapes and the sphere); the oracle's eigenpairs are
 those of its piece of largest mass; ``accuracy`` the default's
@@ -149,6 +150,26 @@ def oracle_neighbours(oracle, points, cut):
         _triangulation.surface_neighbours = original
 
 
+@contextlib.contextmanager
+def random_neighbours(share, cut, seed=0):
+    """The control: our sheet tests with a random ``share`` of the neighbours they keep
+    left out (the oracle's share, so that what the oracle gains is seen to come from
+    which neighbours it cuts, not from how many)."""
+    original = _triangulation.surface_neighbours
+
+    def patched(seen, n_neighbors, knn=None):
+        neighbors, usable, normal, basis = original(seen, n_neighbors, knn)
+        dropped = usable & (np.random.default_rng(seed).random(usable.shape) < share)
+        cut.append(dropped.sum() / max(usable.sum(), 1))
+        return neighbors, usable & ~dropped, normal, basis
+
+    _triangulation.surface_neighbours = patched
+    try:
+        yield
+    finally:
+        _triangulation.surface_neighbours = original
+
+
 def largest_piece(L, M):
     """``(L, M)`` with the points off the piece of largest mass given no mass and no
     stiffness (the eigenpairs leave them out): the oracle can cut a piece off where it
@@ -254,10 +275,21 @@ def run_operator(args):
             with oracle_neighbours(oracle, points, cut):
                 return largest_piece(*point_cloud_laplacian(points))
 
-        builders = {"ours": point_cloud_laplacian, "sheet oracle": with_oracle}
+        def random_cut(points, cut=cut):
+            with random_neighbours(cut[-1], cut):
+                return largest_piece(*point_cloud_laplacian(points))
+
+        builders = {
+            "ours": point_cloud_laplacian,
+            "sheet oracle": with_oracle,
+            "random cut": random_cut,
+        }
         for n, _, results in rows(shape, args.sizes, builders, 50):
+            # Each builder runs twice (timed, then traced): the oracle's share is third
+            # from the end.
+            shares = {"sheet oracle": cut[-3], "random cut": cut[-1]}
             for name, row in results.items():
-                share = f"{cut[-1]:.3f}" if name != "ours" else ""
+                share = f"{shares[name]:.3f}" if name in shares else ""
                 cells = " | ".join(f"{row[q]:.3f}" for q in ("mass", "l1", "med20", "med50"))
                 print(
                     f"| {shape.split('/')[-1]} | {n} | {name} | {share} | {cells} | "
