@@ -26,13 +26,17 @@ neighbours kept by our sheet tests that the oracle cuts (``cat-01`` and ``lion-0
 those of its piece of largest mass; ``accuracy`` the default's
 leave-one-out 1-NN on the clouds of a collection (``--collection``: the 60 Sumner
 meshes by default; ``sample_point_cloud``, seed = the mesh's index, as
-``learning_quality.py``), each of its parts alone, with our operator and
-with the oracle's. ``pairs``: can a cloud tell the neighbours the oracle cuts? For each
-pair of a point and a neighbour its sheet tests keep, eight things a cloud sees of it
-(``FEATURES``: distances, normals, heights, the quadric's residual and normal, whether
-the neighbour keeps the point, their neighbours in common), and how well each alone
-separates the cut pairs from the others (the area under the ROC curve: 0.5 is chance,
-1 or 0 a perfect separation).
+``learning_quality.py``), each of its parts alone, with our operator, with
+the oracle's, and with what oriented normals would allow (``FacingOracle``: the
+neighbours whose outward normal, the mesh's, faces more than 120 degrees away from the
+point's left out, as a scanner's normals could).
+
+``pairs``: can a cloud tell the neighbours the oracle cuts? For each pair of a point
+and a neighbour its sheet tests keep, eight things a cloud sees of it (``FEATURES``:
+distances, normals, heights, the quadric's residual and normal, whether the neighbour
+keeps the point, their neighbours in common), and how well each alone separates the
+cut pairs from the others (the area under the ROC curve: 0.5 is chance, 1 or 0 a
+perfect separation).
 """
 
 import argparse
@@ -127,6 +131,20 @@ class SheetOracle:
             found[found] = chunk[position[found]] == start[found]
             along[found] = distances[position[found], end[found]]
         return (along > 2.0 * space + self.slack).reshape(neighbors.shape)
+
+
+class FacingOracle:
+    """The neighbours a cloud with oriented normals could leave out: those whose
+    outward normal (the mesh's, at the vertex nearest each point) is more than 120
+    degrees from the point's (another sheet facing it, the far side of a thin wall)."""
+
+    def __init__(self, vertices, faces):
+        self.normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
+        self.tree = cKDTree(vertices)
+
+    def other_sheet(self, points, neighbors):
+        normals = self.normals[self.tree.query(points)[1]]
+        return np.einsum("nkj,nj->nk", normals[neighbors], normals) < -0.5
 
 
 @contextlib.contextmanager
@@ -302,8 +320,8 @@ def run_accuracy(args):
     meshes, y, _ = collection(args.collection, 2)
     pipeline = make_mesh_distance(n_jobs=1)
     eigen = pipeline.named_steps["eigen"]
-    fields = {"ours": [], "sheet oracle": []}
-    cut = []
+    fields = {"ours": [], "sheet oracle": [], "oriented normals": []}
+    cut, facing_cut = [], []
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshCleaningWarning)
@@ -314,9 +332,13 @@ def run_accuracy(args):
             oracle = SheetOracle(np.asarray(clean.vertices, float), np.asarray(clean.faces))
             with oracle_neighbours(oracle, points, cut):
                 fields["sheet oracle"].append(eigen.fit_transform([points])[0])
+            facing = FacingOracle(np.asarray(clean.vertices, float), np.asarray(clean.faces))
+            with oracle_neighbours(facing, points, facing_cut):
+                fields["oriented normals"].append(eigen.fit_transform([points])[0])
     print(
         f"{args.collection}, {args.points} points ({time.perf_counter() - start:.0f} s); "
-        f"the oracle cut {np.mean(cut):.3f} of the neighbours kept, {np.max(cut):.3f} at most"
+        f"the oracle cut {np.mean(cut):.3f} of the neighbours kept, {np.max(cut):.3f} at most; "
+        f"the oriented normals {np.mean(facing_cut):.3f}, {np.max(facing_cut):.3f} at most"
     )
     print("| operator | ord1 | ext0 | Shape-DNA | default |")
     print("|---|---|---|---|---|")
