@@ -148,36 +148,14 @@ class FacingOracle:
 
 
 @contextlib.contextmanager
-def oracle_neighbours(oracle, points, cut):
-    """Our sheet tests with ``oracle``'s other-sheet neighbours left out, for clouds
-    made from ``points`` (in the mesh's units; the operator sees them in the unit box,
-    maybe cleaned: matched back by nearest point). Appends the share cut to ``cut``."""
-    original = _triangulation.surface_neighbours
-    unit = cKDTree(cloud_unit_box(points)[0])
-
-    def patched(seen, n_neighbors, knn=None):
-        neighbors, usable, normal, basis = original(seen, n_neighbors, knn)
-        other = oracle.other_sheet(points[unit.query(seen)[1]], neighbors) & usable
-        cut.append(other.sum() / max(usable.sum(), 1))
-        return neighbors, usable & ~other, normal, basis
-
-    _triangulation.surface_neighbours = patched
-    try:
-        yield
-    finally:
-        _triangulation.surface_neighbours = original
-
-
-@contextlib.contextmanager
-def random_neighbours(share, cut, seed=0):
-    """The control: our sheet tests with a random ``share`` of the neighbours they keep
-    left out (the oracle's share, so that what the oracle gains is seen to come from
-    which neighbours it cuts, not from how many)."""
+def leaving_out(choose, cut):
+    """Our sheet tests with the neighbours ``choose(seen, neighbors)`` marks (an
+    ``(n, k)`` mask) left out of those they keep; appends the share cut to ``cut``."""
     original = _triangulation.surface_neighbours
 
     def patched(seen, n_neighbors, knn=None):
         neighbors, usable, normal, basis = original(seen, n_neighbors, knn)
-        dropped = usable & (np.random.default_rng(seed).random(usable.shape) < share)
+        dropped = choose(seen, neighbors) & usable
         cut.append(dropped.sum() / max(usable.sum(), 1))
         return neighbors, usable & ~dropped, normal, basis
 
@@ -186,6 +164,25 @@ def random_neighbours(share, cut, seed=0):
         yield
     finally:
         _triangulation.surface_neighbours = original
+
+
+def oracle_neighbours(oracle, points, cut):
+    """``oracle``'s other-sheet neighbours left out, for clouds made from ``points`` (in
+    the mesh's units; the operator sees them in the unit box, maybe cleaned: matched
+    back by nearest point)."""
+    unit = cKDTree(cloud_unit_box(points)[0])
+    return leaving_out(
+        lambda seen, neighbors: oracle.other_sheet(points[unit.query(seen)[1]], neighbors), cut
+    )
+
+
+def random_neighbours(share, cut, seed=0):
+    """The control: a random ``share`` of the neighbours left out (the oracle's share,
+    so that what the oracle gains is seen to come from which neighbours it cuts, not
+    from how many)."""
+    return leaving_out(
+        lambda seen, neighbors: np.random.default_rng(seed).random(neighbors.shape) < share, cut
+    )
 
 
 def largest_piece(L, M):
