@@ -19,11 +19,11 @@ neighbours on another sheet of the mesh left out: those whose distance along the
 mesh's edges (between the mesh vertices nearest to the two points) exceeds twice their
 distance in space plus two median edge lengths (a paw on the flank, a leg through it).
 ``operator`` prints the rows of ``bench_cloud_operator.py`` (uniform clouds, the mesh's
-cotangent operator as the reference) for ours, the oracle and a control (as many of
-the neighbours cut as the oracle cuts, drawn at random), and the share of the
-neighbours kept by our sheet tests that the oracle cuts (``cat-01`` and ``lion-01``, or
-``--shapes all``: that benchmark's 13 shapes and the sphere); the oracle's eigenpairs are
-those of its piece of largest mass; ``accuracy`` the default's
+cotangent operator as the reference) for ours, the oracle, a control (as many of the
+neighbours cut as the oracle cuts, drawn at random) and oriented normals (below), with
+the share of the neighbours kept by our sheet tests that each cuts (``cat-01`` and
+``lion-01``, or ``--shapes all``: that benchmark's 13 shapes and the sphere); the
+oracles' eigenpairs are those of their piece of largest mass; ``accuracy`` the default's
 leave-one-out 1-NN on the clouds of a collection (``--collection``: the 60 Sumner
 meshes by default; ``sample_point_cloud``, seed = the mesh's index, as
 ``learning_quality.py``), each of its parts alone, with our operator, with
@@ -294,15 +294,26 @@ def run_operator(args):
             with random_neighbours(cut[-1], cut):
                 return largest_piece(*point_cloud_laplacian(points))
 
+        facing, facing_cut = FacingOracle(vertices, faces), []
+
+        def with_normals(points, facing=facing, facing_cut=facing_cut):
+            with oracle_neighbours(facing, points, facing_cut):
+                return largest_piece(*point_cloud_laplacian(points))
+
         builders = {
             "ours": point_cloud_laplacian,
             "sheet oracle": with_oracle,
             "random cut": random_cut,
+            "oriented normals": with_normals,
         }
         for n, _, results in rows(shape, args.sizes, builders, 50):
             # Each builder runs twice (timed, then traced): the oracle's share is third
             # from the end.
-            shares = {"sheet oracle": cut[-3], "random cut": cut[-1]}
+            shares = {
+                "sheet oracle": cut[-3],
+                "random cut": cut[-1],
+                "oriented normals": facing_cut[-1],
+            }
             for name, row in results.items():
                 share = f"{shares[name]:.3f}" if name in shares else ""
                 cells = " | ".join(f"{row[q]:.3f}" for q in ("mass", "l1", "med20", "med50"))
