@@ -61,6 +61,17 @@ def collection(name, n_jobs):
     return list(data.data), np.asarray(data.target), list(data.target_names)
 
 
+def edge_graph(vertices, faces):
+    """The mesh's edges as a symmetric sparse matrix of their lengths (for distances
+    along the edges, ``scipy.sparse.csgraph.dijkstra``), and the lengths."""
+    import scipy.sparse as sp
+
+    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    length = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
+    graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(vertices),) * 2)
+    return graph.tocsr().maximum(graph.tocsr().T), length
+
+
 def loo_1nn(matrix, y):
     """Leave-one-out 1-NN accuracy of a full distance matrix (ties: lowest index)."""
     matrix = np.array(matrix, dtype=float)

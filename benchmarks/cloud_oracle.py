@@ -55,7 +55,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 import trimesh
-from _common import DATA, collection, loo_1nn
+from _common import DATA, collection, edge_graph, loo_1nn
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
@@ -183,10 +183,7 @@ def facing_away(normals, cosine=-0.5):
 
 def around(points, faces, ratio=2.0):
     """Neighbours more than ``ratio`` times farther along the mesh's edges than in space."""
-    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
-    graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(points),) * 2)
-    graph = graph.tocsr().maximum(graph.tocsr().T)
+    graph = edge_graph(points, faces)[0]
 
     def mask(neighbors):
         rows = np.repeat(np.arange(len(points)), neighbors.shape[1])
@@ -313,10 +310,7 @@ def contact_share(mesh, within=1.0, apart=5.0):
     points = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     spacing = np.sqrt(mesh.area / len(points))
-    edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
-    graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(points),) * 2)
-    graph = graph.tocsr().maximum(graph.tocsr().T)
+    graph = edge_graph(points, faces)[0]
     pairs = cKDTree(points).query_pairs(within * spacing, output_type="ndarray")
     if len(pairs) == 0:
         return 0.0

@@ -48,7 +48,7 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 import trimesh
-from _common import DATA, collection, loo_1nn
+from _common import DATA, collection, edge_graph, loo_1nn
 from bench_cloud_operator import SHAPES, load, rows
 from cloud_weights import DEFAULT, combined
 from joblib import Parallel, delayed
@@ -106,10 +106,7 @@ class SheetOracle:
     """Which neighbours of a cloud sampled on a mesh lie on another sheet of it."""
 
     def __init__(self, vertices, faces):
-        edges = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-        length = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
-        graph = sp.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(len(vertices),) * 2)
-        self.graph = graph.tocsr().maximum(graph.tocsr().T)
+        self.graph, length = edge_graph(vertices, faces)
         self.slack = 2.0 * float(np.median(length))
         self.tree = cKDTree(vertices)
 
@@ -211,10 +208,10 @@ def pair_features(points, neighbors, usable, normal, basis):
     residual, turned = np.zeros(n * k), np.zeros(n * k)
     for i in range(n):
         own = slice(i * k, (i + 1) * k)
+        if usable[i].sum() < 6:  # too few for the quadric's five coefficients
+            continue
         x, y = offset[own] @ basis[i, :, 0], offset[own] @ basis[i, :, 1]
         design = np.column_stack([x, y, x * x, x * y, y * y])
-        if usable[i].sum() < 6:
-            continue
         c = np.linalg.lstsq(design[usable[i]], offset[own][usable[i]] @ normal[i], rcond=None)[0]
         residual[own] = np.abs(offset[own] @ normal[i] - design @ c) / tenth[own]
         slope_x, slope_y = c[0] + 2 * c[2] * x + c[3] * y, c[1] + c[3] * x + 2 * c[4] * y
@@ -265,7 +262,10 @@ def run_pairs(args):
         neighbors, usable, normal, basis = _triangulation.surface_neighbours(unit)
         other = SheetOracle(vertices, faces).other_sheet(points, neighbors)[usable]
         features = pair_features(unit, neighbors, usable, normal, basis)[usable.ravel()]
-        scores = " | ".join(f"{roc_auc_score(other, f):.2f}" for f in features.T)
+        if other.all() or not other.any():  # one class: no separation to score
+            scores = " | ".join("n/a" for _ in FEATURES)
+        else:
+            scores = " | ".join(f"{roc_auc_score(other, f):.2f}" for f in features.T)
         print(f"| {shape.split('/')[-1]} | {usable.sum()} | {other.mean():.3f} | {scores} |")
 
 
